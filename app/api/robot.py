@@ -1,0 +1,119 @@
+"""Commands, plans, e-stop and state of the robot."""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Depends
+from pydantic import BaseModel, ConfigDict, Field, field_validator
+
+from app.api.deps import raise_if_refused, runtime
+from app.runtime import Runtime
+from app.serialize import event_json, reply_json, state_json
+from robot.interface import CancelPlan, EStop, ExecutePlan, ReleaseEStop, Replan, RunCommand
+from robot.worker import MAX_COMMAND_CHARS
+
+router = APIRouter(prefix="/api", tags=["robot"])
+RuntimeDep = Annotated[Runtime, Depends(runtime)]
+
+
+class CommandIn(BaseModel):
+    """A typed command, or an explicit plan (checked against the plan schema and the world)."""
+
+    model_config = ConfigDict(extra="forbid")
+    text: str = Field("", max_length=MAX_COMMAND_CHARS, examples=["pick up the red mug from the kitchen counter"])
+    plan: dict[str, Any] | None = Field(None, examples=[{"steps": [{"action": "say", "args": {"text": "hello"}}]}])
+    source: str = Field("api", max_length=16, pattern=r"^[a-z_]+$")
+
+
+class EStopIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    source: str = Field("api", max_length=16, pattern=r"^[a-z_-]+$")
+    client_time_s: float | None = Field(None, description="Unix time of the press, for latency measurement")
+
+    @field_validator("client_time_s")
+    @classmethod
+    def _finite(cls, value: float | None) -> float | None:
+        if value is not None and not math.isfinite(value):
+            raise ValueError("client_time_s must be finite")
+        return value
+
+
+@router.get("/health")
+def health(rt: RuntimeDep) -> dict[str, Any]:
+    state = rt.worker.state()
+    return {
+        "status": "ok",
+        "mode": state.mode.value,
+        "estop_latched": state.estop_latched,
+        "sim_time_s": state.sim_time_s,
+        "control": state_json(state)["control"],
+        "session_id": rt.recorder.session_id,
+        "mirror": {"port": rt.mirror.port, "updates": rt.mirror.updates} if rt.mirror else None,
+    }
+
+
+@router.get("/config")
+def config(rt: RuntimeDep) -> dict[str, Any]:
+    description = rt.worker.describe()
+    return {
+        "viser_port": rt.mirror.port if rt.mirror else None,
+        "seed": description.seed,
+        "robot": description.model_name,
+        "places": list(description.places),
+        "objects": list(description.objects),
+        "control_hz": description.control_hz,
+        "physics_hz": description.physics_hz,
+        "session_id": rt.recorder.session_id,
+    }
+
+
+@router.get("/state")
+def state(rt: RuntimeDep, qpos: bool = False) -> dict[str, Any]:
+    return state_json(rt.worker.state(), include_qpos=qpos)
+
+
+@router.get("/events")
+def events(rt: RuntimeDep) -> list[dict[str, Any]]:
+    return [event_json(e) for e in rt.worker.recent_events()]
+
+
+@router.post("/commands", status_code=202)
+def post_command(body: CommandIn, rt: RuntimeDep) -> dict[str, Any]:
+    """Plan (or check the given plan) and start executing it. 422: not understood or invalid; 409: e-stop."""
+    if body.plan is not None:
+        reply = rt.worker.submit(ExecutePlan(body.plan, body.text))
+    else:
+        reply = rt.worker.submit(RunCommand(body.text))
+    rt.recorder.record_command(body.text or "(plan)", body.source, reply)
+    raise_if_refused(reply)
+    return reply_json(reply)
+
+
+@router.post("/replan", status_code=202)
+def replan(rt: RuntimeDep) -> dict[str, Any]:
+    """Re-run the planner for the current command from the current state."""
+    reply = rt.worker.submit(Replan())
+    raise_if_refused(reply)
+    return reply_json(reply)
+
+
+@router.post("/plan/cancel")
+def cancel_plan(rt: RuntimeDep) -> dict[str, Any]:
+    return reply_json(rt.worker.submit(CancelPlan()))
+
+
+@router.post("/estop")
+def estop(rt: RuntimeDep, body: EStopIn | None = None) -> dict[str, Any]:
+    """Latch the e-stop: cancel the plan and hold position. Idempotent."""
+    body = body or EStopIn()
+    return reply_json(rt.worker.submit(EStop(source=body.source, client_time_s=body.client_time_s)))
+
+
+@router.post("/estop/reset")
+def estop_reset(rt: RuntimeDep) -> dict[str, Any]:
+    """Release a latched e-stop. Never restarts motion: a new command or a replan does."""
+    reply = rt.worker.submit(ReleaseEStop(source="api"))
+    raise_if_refused(reply)
+    return reply_json(reply)

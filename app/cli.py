@@ -1,0 +1,123 @@
+"""The `humanoid` command: serve, run, estop, db upgrade, bench."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from app.settings import Settings, get_settings
+
+
+def _serve(args: argparse.Namespace, settings: Settings) -> int:
+    import uvicorn
+
+    from app.main import create_app
+    from app.sessions.db import upgrade_to_head
+
+    overrides = {"seed": args.seed, "enable_mirror": not args.no_mirror, "host": args.host, "port": args.port}
+    settings = settings.model_copy(update={k: v for k, v in overrides.items() if v is not None})
+    if args.viser_port is not None:
+        settings = settings.model_copy(update={"viser_port": args.viser_port})
+    upgrade_to_head(settings.database_url)
+    print(f"Humanoid mission control: http://{settings.host}:{settings.port}  (3D mirror on port {settings.viser_port})")
+    uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_level="warning", ws_max_size=65536)
+    return 0
+
+
+def _run(args: argparse.Namespace, settings: Settings) -> int:
+    from app.headless import run_command
+
+    result = run_command(args.text, seed=args.seed, settings=settings, timeout_s=args.timeout)
+    if args.json:
+        print(json.dumps(result, indent=2))
+    else:
+        print(f"{'SUCCESS' if result['success'] else 'FAILED'}: {result['transcript']!r} (session {result['session_id']})")
+        if "error" in result:
+            print(f"  {result['error']}")
+        for step in result["steps"]:
+            detail = f" ({step['detail']})" if step["detail"] else ""
+            print(f"  {step['action']}({', '.join(step['args'].values())}): {step['status']}{detail}")
+        print(f"  sim {result['sim_time_s']:.2f} s, wall {result['wall_time_s']:.2f} s, fell: {result['fell']}")
+    return 0 if result["success"] else 1
+
+
+def _estop(args: argparse.Namespace, settings: Settings) -> int:
+    import httpx
+
+    url = args.url or f"http://{settings.host}:{settings.port}"
+    path = "/api/estop/reset" if args.release else "/api/estop"
+    try:
+        response = httpx.post(url + path, json=None if args.release else {"source": "cli"}, timeout=5.0)
+    except httpx.HTTPError as exc:
+        print(f"could not reach the server at {url}: {exc}", file=sys.stderr)
+        return 2
+    body = response.json()
+    detail = body.get("detail", body)
+    print(detail["message"] if isinstance(detail, dict) else detail)
+    return 0 if response.is_success else 1
+
+
+def _db(args: argparse.Namespace, settings: Settings) -> int:
+    from app.sessions.db import upgrade_to_head
+
+    upgrade_to_head(settings.database_url)
+    print(f"database at head: {settings.database_url}")
+    return 0
+
+
+def _bench(args: argparse.Namespace, settings: Settings) -> int:
+    from app.bench import run_suite
+
+    return run_suite(args.suite, args)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="humanoid", description="Humanoid mission control")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    serve = sub.add_parser("serve", help="start the web app with the simulated robot (real time)")
+    serve.add_argument("--host", default=None, help="interface to bind (default 127.0.0.1, or HOST)")
+    serve.add_argument("--port", type=int, default=None, help="HTTP port (default 8000, or PORT)")
+    serve.add_argument("--viser-port", type=int, default=None, help="port of the 3D mirror (default 8081)")
+    serve.add_argument("--seed", type=int, default=None, help="world seed (object placement, obstacles)")
+    serve.add_argument("--no-mirror", action="store_true", help="do not start the 3D mirror")
+    serve.set_defaults(func=_serve)
+
+    run = sub.add_parser("run", help="run one command headless in simulation and print the result")
+    run.add_argument("text", help='e.g. "pick up the red mug from the kitchen counter"')
+    run.add_argument("--seed", type=int, default=0)
+    run.add_argument("--json", action="store_true", help="print the result as JSON")
+    run.add_argument("--timeout", type=float, default=300.0, help="wall-clock limit in seconds")
+    run.set_defaults(func=_run)
+
+    estop = sub.add_parser("estop", help="latch (or --release) the e-stop of a running server")
+    estop.add_argument("--release", action="store_true")
+    estop.add_argument("--url", default=None, help="server URL (default http://HOST:PORT)")
+    estop.set_defaults(func=_estop)
+
+    db = sub.add_parser("db", help="database maintenance")
+    db_sub = db.add_subparsers(dest="db_command", required=True)
+    db_sub.add_parser("upgrade", help="apply pending migrations").set_defaults(func=_db)
+
+    bench = sub.add_parser("bench", help="benchmarks, written as JSON")
+    bench.add_argument("suite", choices=["core"])
+    bench.add_argument("--json", action="store_true", help="print the JSON result")
+    bench.add_argument("--output", default=None, help="also write the JSON result to this file")
+    bench.add_argument("--presses", type=int, default=100, help="e-stop presses to time")
+    bench.add_argument("--viewers", type=int, default=2, help="browser pages with the 3D view open")
+    bench.add_argument("--duration", type=float, default=20.0, help="seconds of control-loop timing")
+    bench.set_defaults(func=_bench)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if getattr(args, "seed", None) is not None and args.seed < 0:
+        parser.error("--seed must be >= 0")
+    return args.func(args, get_settings())
+
+
+if __name__ == "__main__":
+    sys.exit(main())

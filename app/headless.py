@@ -1,0 +1,63 @@
+"""`humanoid run`: the whole loop headless, as fast as the simulation goes, recorded as a session."""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+from app.sessions.db import make_engine, make_session_factory, upgrade_to_head
+from app.sessions.recorder import SessionRecorder
+from app.settings import Settings
+from robot.interface import PlanState, RunCommand
+from robot.model.world import generate_world
+from robot.worker import RobotWorker
+
+SETTLE_SIM_S = 0.5  # let the robot settle on its feet before the command, as an operator would
+
+
+def run_command(text: str, seed: int, settings: Settings, timeout_s: float = 300.0) -> dict[str, Any]:
+    """Plan and execute `text` in a fresh simulation; returns the result the CLI prints."""
+    upgrade_to_head(settings.database_url)
+    engine = make_engine(settings.database_url)
+    worker = RobotWorker(generate_world(seed), realtime=False, control_hz=settings.control_hz)
+    recorder = SessionRecorder(make_session_factory(engine), worker, kind="run", seed=seed,
+                               sample_hz=settings.state_sample_hz)  # fmt: skip
+    started = time.perf_counter()
+    worker.start()
+    try:
+        worker.wait_for(lambda s: s.sim_time_s >= SETTLE_SIM_S, timeout_s)
+        reply = worker.submit(RunCommand(text))
+        recorder.record_command(text, "cli", reply)
+        finished = reply.accepted and worker.wait_for(
+            lambda s: s.plan is not None and s.plan.command_id == reply.command_id and s.plan.state != "running",
+            timeout_s,
+        )
+        state = worker.state()
+    finally:
+        worker.stop()
+    wall = time.perf_counter() - started
+    plan_status = state.plan if reply.accepted else None
+    success = bool(finished and plan_status and plan_status.state == PlanState.SUCCEEDED and not state.fallen)
+    result: dict[str, Any] = {
+        "success": success,
+        "transcript": text,
+        "plan": reply.plan.to_dict() if reply.plan else None,
+        "steps": [
+            {"action": s.action, "args": s.args, "status": s.state.value, "detail": s.detail}
+            for s in (plan_status.steps if plan_status else ())
+        ],
+        "sim_time_s": round(state.sim_time_s, 3),
+        "wall_time_s": round(wall, 3),
+        "fell": state.fallen,
+        "held_object": state.held_object,
+        "session_id": recorder.session_id,
+    }
+    if not reply.accepted:
+        result["error"] = reply.message
+        result["errors"] = list(reply.errors)
+    elif not finished:
+        result["error"] = f"the plan did not finish within {timeout_s:.0f} s"
+    outcome = "succeeded" if success else "failed"
+    recorder.close(outcome=outcome, summary={k: result[k] for k in ("success", "transcript", "sim_time_s", "fell")})
+    engine.dispose()
+    return result

@@ -1,0 +1,73 @@
+"""The live 3D mirror: a viser server (its own port) that shows the robot and its world as the worker reports them.
+
+The mirror only reads `RobotState` snapshots (qpos) and the model from `RobotDescription`; it recomputes body
+poses in its own MjData, so it never touches the worker's simulation. mjviser builds the scene from the model.
+"""
+
+from __future__ import annotations
+
+import logging
+import pickle
+import threading
+import time
+
+import mujoco
+import numpy as np
+import viser
+from mjviser.scene import ViserMujocoScene
+
+from robot.interface import RobotPort
+
+log = logging.getLogger(__name__)
+
+
+class SceneMirror:
+    def __init__(self, port: RobotPort, host: str, viser_port: int, rate_hz: float = 30.0) -> None:
+        description = port.describe()
+        self._port = port
+        self._period = 1.0 / rate_hz
+        self.model: mujoco.MjModel = pickle.loads(description.mj_model_bytes)
+        self.data = mujoco.MjData(self.model)
+        self.server = viser.ViserServer(host=host, port=viser_port, label="humanoid mirror", verbose=False)
+        self.server.initial_camera.position = (-3.2, -2.8, 3.0)
+        self.server.initial_camera.look_at = (0.0, 0.0, 0.2)
+        self.scene = ViserMujocoScene(self.server, self.model, num_envs=1)
+        self.scene.camera_tracking_enabled = False  # a fixed world frame: the apartment stays put
+        self.updates = 0
+        self._last_qpos: tuple[float, ...] | None = None
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="scene-mirror", daemon=True)
+
+    @property
+    def port(self) -> int:
+        return int(self.server.get_port())
+
+    def start(self) -> None:
+        self._thread.start()
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread.is_alive():
+            self._thread.join(timeout=2.0)
+        self.server.stop()
+
+    def update_once(self) -> bool:
+        """Push the latest robot state to every viewer; returns False when nothing moved."""
+        state = self._port.state()
+        if state.qpos == self._last_qpos:
+            return False
+        self._last_qpos = state.qpos
+        self.data.qpos[:] = np.asarray(state.qpos)
+        mujoco.mj_kinematics(self.model, self.data)
+        self.scene.update_from_mjdata(self.data)
+        self.server.flush()
+        self.updates += 1
+        return True
+
+    def _run(self) -> None:
+        while not self._stop.wait(self._period):
+            try:
+                self.update_once()
+            except Exception:  # a viewer glitch must never take the mirror down for good
+                log.exception("mirror update failed")
+                time.sleep(1.0)

@@ -1,0 +1,51 @@
+"""Everything a running server holds: the robot port, the mirror, the DB and the session being recorded."""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+
+from sqlalchemy import Engine
+from sqlalchemy.orm import sessionmaker
+
+from app.mirror import SceneMirror
+from app.sessions.db import make_engine, make_session_factory, upgrade_to_head
+from app.sessions.recorder import SessionRecorder
+from app.settings import Settings
+from robot.model.world import generate_world
+from robot.worker import RobotWorker
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class Runtime:
+    settings: Settings
+    worker: RobotWorker
+    engine: Engine
+    db: sessionmaker
+    recorder: SessionRecorder
+    mirror: SceneMirror | None
+
+    @staticmethod
+    def start(settings: Settings, worker: RobotWorker | None = None) -> Runtime:
+        """Migrate the DB, start the robot worker (unless given one), the session recorder and the mirror."""
+        upgrade_to_head(settings.database_url)
+        engine = make_engine(settings.database_url)
+        db = make_session_factory(engine)
+        worker = worker or RobotWorker(generate_world(settings.seed), realtime=True, control_hz=settings.control_hz)
+        worker.start()
+        recorder = SessionRecorder(db, worker, kind="serve", seed=settings.seed, backend=settings.backend,
+                                   sample_hz=settings.state_sample_hz)  # fmt: skip
+        mirror = None
+        if settings.enable_mirror:
+            mirror = SceneMirror(worker, settings.viser_host, settings.viser_port, settings.mirror_hz)
+            mirror.start()
+        return Runtime(settings, worker, engine, db, recorder, mirror)
+
+    def stop(self) -> None:
+        if self.mirror:
+            self.mirror.stop()
+        self.worker.stop()
+        self.recorder.close(outcome=None)
+        self.engine.dispose()

@@ -1,0 +1,1 @@
+"""Session storage: every run of the server or of `humanoid run` is a session in the DB."""

@@ -1,0 +1,39 @@
+"""All settings in one place (pydantic-settings). Environment variables use the prefix HUMANOID_, except the
+conventional DATABASE_URL, HOST and PORT, which are read as they are."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+from typing import Literal
+
+from pydantic import AliasChoices, Field
+from pydantic_settings import BaseSettings, SettingsConfigDict
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+
+
+class Settings(BaseSettings):
+    model_config = SettingsConfigDict(env_prefix="HUMANOID_", env_file=".env", extra="ignore")
+
+    host: str = Field("127.0.0.1", validation_alias=AliasChoices("HOST", "HUMANOID_HOST"))
+    port: int = Field(8000, ge=1, le=65535, validation_alias=AliasChoices("PORT", "HUMANOID_PORT"))
+    database_url: str = Field(
+        f"sqlite:///{REPO_ROOT / 'data' / 'humanoid.db'}",
+        validation_alias=AliasChoices("DATABASE_URL", "HUMANOID_DATABASE_URL"),
+    )
+    viser_port: int = Field(8081, ge=1, le=65535, description="port of the viser 3D scene server")
+    viser_host: str = Field("127.0.0.1", description="interface the viser server binds to")
+    backend: Literal["sim"] = "sim"
+    seed: int = Field(0, ge=0)
+    control_hz: float = Field(100.0, gt=0, le=1000)
+    mirror_hz: float = Field(30.0, gt=0, le=120)
+    state_sample_hz: float = Field(10.0, gt=0, le=100, description="robot state samples stored per second")
+    ws_state_hz: float = Field(20.0, gt=0, le=100, description="state pushes per second to each browser")
+    max_body_bytes: int = Field(64 * 1024, gt=0, description="largest accepted HTTP request body")
+    enable_mirror: bool = True
+
+
+@lru_cache
+def get_settings() -> Settings:
+    return Settings()

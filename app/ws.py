@@ -1,0 +1,92 @@
+"""WebSocket `/ws`: state and events out, e-stop in (the fastest path from a browser press to the robot).
+
+Messages from the server: {"type": "hello", ...}, {"type": "state", "state": ...}, {"type": "event", "event": ...},
+{"type": "estop_ack", ...}, {"type": "error", "message": ...}.
+Messages to the server: {"type": "estop", "client_time_s": float | null}, {"type": "estop_release"},
+{"type": "ping", "t": any}.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import math
+import time
+from typing import Any
+
+from fastapi import APIRouter, WebSocket, WebSocketDisconnect
+
+from app.runtime import Runtime
+from app.serialize import event_json, reply_json, state_json
+from robot.interface import EStop, ReleaseEStop
+
+router = APIRouter()
+MAX_MESSAGE_BYTES = 4096
+
+
+def _client_time(message: dict[str, Any]) -> float | None:
+    value = message.get("client_time_s")
+    if isinstance(value, int | float) and math.isfinite(value):
+        return float(value)
+    return None
+
+
+async def _receive(ws: WebSocket, rt: Runtime) -> None:
+    while True:
+        raw = await ws.receive_text()
+        if len(raw) > MAX_MESSAGE_BYTES:
+            await ws.send_json({"type": "error", "message": f"message larger than {MAX_MESSAGE_BYTES} bytes"})
+            continue
+        try:
+            message = json.loads(raw)
+            kind = message["type"]
+        except (ValueError, KeyError, TypeError):
+            await ws.send_json({"type": "error", "message": "expected a JSON object with a 'type'"})
+            continue
+        if kind == "estop":
+            reply = rt.worker.submit(EStop(source="browser", client_time_s=_client_time(message)))
+            await ws.send_json({"type": "estop_ack", "server_time_s": time.time(), **reply_json(reply)})
+        elif kind == "estop_release":
+            reply = rt.worker.submit(ReleaseEStop(source="browser"))
+            await ws.send_json({"type": "estop_release_ack", **reply_json(reply)})
+        elif kind == "ping":
+            await ws.send_json({"type": "pong", "t": message.get("t"), "server_time_s": time.time()})
+        else:
+            await ws.send_json({"type": "error", "message": f"unknown message type {kind!r}"})
+
+
+async def _send(ws: WebSocket, rt: Runtime) -> None:
+    subscription = rt.worker.subscribe()
+    period = 1.0 / rt.settings.ws_state_hz
+    try:
+        while True:
+            while (event := subscription.get(timeout=0)) is not None:
+                await ws.send_json({"type": "event", "event": event_json(event)})
+            await ws.send_json({"type": "state", "state": state_json(rt.worker.state())})
+            await asyncio.sleep(period)
+    finally:
+        subscription.close()
+
+
+@router.websocket("/ws")
+async def robot_socket(ws: WebSocket) -> None:
+    rt: Runtime = ws.app.state.runtime
+    await ws.accept()
+    await ws.send_json(
+        {
+            "type": "hello",
+            "session_id": rt.recorder.session_id,
+            "recent_events": [event_json(e) for e in rt.worker.recent_events()[-100:]],
+        }
+    )
+    tasks = [asyncio.create_task(_receive(ws, rt)), asyncio.create_task(_send(ws, rt))]
+    try:
+        done, _ = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
+        for task in done:
+            if (exc := task.exception()) and not isinstance(exc, WebSocketDisconnect):
+                raise exc
+    except WebSocketDisconnect:
+        pass
+    finally:
+        for task in tasks:
+            task.cancel()

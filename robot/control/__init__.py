@@ -1,0 +1,1 @@
+"""Control layer: postures, safe stop (walking and whole-body control plug in here)."""

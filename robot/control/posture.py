@@ -1,0 +1,43 @@
+"""Posture control: hold a joint-space posture, moving to a new one with a capped joint speed.
+
+The controlled stop of the e-stop is `freeze()`: targets become the measured positions, so the biped holds
+itself where it is instead of going limp (falling) or finishing a motion.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+# Joint speed cap when moving between postures (rad/s); well under the XM430's ~4.8 rad/s no-load speed.
+MAX_POSTURE_SPEED_RAD_S = 1.5
+
+
+class PostureController:
+    def __init__(self, initial_targets: np.ndarray, max_speed_rad_s: float = MAX_POSTURE_SPEED_RAD_S) -> None:
+        self._targets = np.array(initial_targets, dtype=float)
+        self._goal = self._targets.copy()
+        self._max_speed = max_speed_rad_s
+
+    @property
+    def goal(self) -> np.ndarray:
+        return self._goal.copy()
+
+    def move_to(self, goal: np.ndarray) -> None:
+        """Start a capped-speed move from the current targets to `goal`."""
+        self._goal = np.array(goal, dtype=float)
+
+    def freeze(self, measured_positions: np.ndarray) -> np.ndarray:
+        """Controlled stop: hold the measured posture from now on; returns the new targets."""
+        self._targets = np.array(measured_positions, dtype=float)
+        self._goal = self._targets.copy()
+        return self._targets.copy()
+
+    def update(self, dt: float) -> np.ndarray:
+        """Targets for this tick."""
+        step = np.clip(self._goal - self._targets, -self._max_speed * dt, self._max_speed * dt)
+        self._targets = self._targets + step
+        return self._targets.copy()
+
+    @property
+    def settled(self) -> bool:
+        return bool(np.allclose(self._targets, self._goal, atol=1e-6))

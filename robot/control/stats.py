@@ -1,0 +1,59 @@
+"""Tick-time and real-time-factor statistics of the control loop, cheap enough to update every tick."""
+
+from __future__ import annotations
+
+import time
+from collections import deque
+
+import numpy as np
+
+from robot.interface import ControlStats
+
+WINDOW_TICKS = 3000
+
+
+class LoopStats:
+    def __init__(self, control_hz: float) -> None:
+        self.control_hz = control_hz
+        self._ticks: deque[float] = deque(maxlen=WINDOW_TICKS)
+        self.tick_count = 0
+        self.deadline_misses = 0
+        self.max_tick_s = 0.0
+        self._rtf = 0.0
+        self._rtf_wall0 = time.perf_counter()
+        self._rtf_sim0 = 0.0
+        self._snapshot = ControlStats(control_hz=control_hz)
+
+    def record_tick(self, duration_s: float, missed_deadline: bool) -> None:
+        self._ticks.append(duration_s)
+        self.tick_count += 1
+        self.max_tick_s = max(self.max_tick_s, duration_s)
+        if missed_deadline:
+            self.deadline_misses += 1
+
+    def update_rtf(self, sim_time_s: float) -> None:
+        """Real-time factor over the last second or so of wall time."""
+        now = time.perf_counter()
+        elapsed = now - self._rtf_wall0
+        if elapsed >= 1.0:
+            self._rtf = (sim_time_s - self._rtf_sim0) / elapsed
+            self._rtf_wall0, self._rtf_sim0 = now, sim_time_s
+            self._refresh()
+
+    def _refresh(self) -> None:
+        ticks = np.fromiter(self._ticks, dtype=float) if self._ticks else np.zeros(1)
+        self._snapshot = ControlStats(
+            tick_p50_ms=float(np.percentile(ticks, 50) * 1e3),
+            tick_p99_ms=float(np.percentile(ticks, 99) * 1e3),
+            tick_max_ms=self.max_tick_s * 1e3,
+            ticks=self.tick_count,
+            deadline_misses=self.deadline_misses,
+            rtf=self._rtf,
+            control_hz=self.control_hz,
+        )
+
+    def snapshot(self) -> ControlStats:
+        return self._snapshot
+
+    def tick_durations_ms(self) -> list[float]:
+        return [t * 1e3 for t in self._ticks]

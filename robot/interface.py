@@ -1,0 +1,244 @@
+"""The one narrow interface between the robot worker and everything else: commands in, state and events out.
+
+Every type here is a frozen dataclass of plain values, so the worker can later move to its own process and
+these cross a pipe unchanged.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import IntEnum, StrEnum
+from typing import Any, Protocol
+
+# ---------------------------------------------------------------------------------------------------------------
+# Plans
+
+
+@dataclass(frozen=True)
+class Step:
+    """One action of a plan, e.g. Step("navigate_to", {"target": "kitchen counter"})."""
+
+    action: str
+    args: dict[str, str]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"action": self.action, "args": dict(self.args)}
+
+
+@dataclass(frozen=True)
+class Plan:
+    steps: tuple[Step, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"steps": [s.to_dict() for s in self.steps]}
+
+    @staticmethod
+    def from_dict(data: dict[str, Any]) -> Plan:
+        """Build a plan from already schema-validated JSON."""
+        return Plan(tuple(Step(s["action"], dict(s.get("args", {}))) for s in data["steps"]))
+
+
+class StepState(StrEnum):
+    PENDING = "pending"
+    RUNNING = "running"
+    SUCCEEDED = "succeeded"
+    FAILED = "failed"
+    SKIPPED = "skipped"
+    CANCELLED = "cancelled"
+
+
+@dataclass(frozen=True)
+class StepStatus:
+    index: int
+    action: str
+    args: dict[str, str]
+    state: StepState = StepState.PENDING
+    detail: str = ""
+    sim_start_s: float | None = None
+    sim_end_s: float | None = None
+
+
+class PlanState(StrEnum):
+    RUNNING = "running"
+    SUCCEEDED = "succeeded"
+    FAILED = "failed"
+    CANCELLED = "cancelled"
+
+
+@dataclass(frozen=True)
+class PlanStatus:
+    """A plan being or having been executed: which command it serves, which revision, per-step status."""
+
+    plan_id: int
+    command_id: int
+    command_text: str
+    revision: int
+    state: PlanState
+    steps: tuple[StepStatus, ...]
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Commands in
+
+
+@dataclass(frozen=True)
+class RunCommand:
+    """A natural-language command: planned, validated, then executed."""
+
+    text: str
+
+
+@dataclass(frozen=True)
+class ExecutePlan:
+    """An explicit plan as JSON (e.g. edited by the operator): checked against the schema and the world, then run."""
+
+    plan_json: Any
+    text: str = ""
+
+
+@dataclass(frozen=True)
+class EStop:
+    """Latch the emergency stop. `client_time_s` (Unix time of the press) lets the worker measure latency."""
+
+    source: str = "api"
+    client_time_s: float | None = None
+
+
+@dataclass(frozen=True)
+class ReleaseEStop:
+    source: str = "api"
+
+
+@dataclass(frozen=True)
+class Replan:
+    """Re-run the planner for the current command from the current state."""
+
+
+@dataclass(frozen=True)
+class CancelPlan:
+    """Stop executing the current plan (not an e-stop: the robot keeps balancing)."""
+
+
+Command = RunCommand | ExecutePlan | EStop | ReleaseEStop | Replan | CancelPlan
+
+
+class Refusal(StrEnum):
+    """Why a command was not accepted; the web side maps these to HTTP status codes."""
+
+    ESTOP_LATCHED = "estop_latched"  # 409
+    INVALID = "invalid"  # 422
+    NOTHING_TO_REPLAN = "nothing_to_replan"  # 409
+    NOT_LATCHED = "not_latched"  # 409
+
+
+@dataclass(frozen=True)
+class CommandReply:
+    accepted: bool
+    message: str = ""
+    refusal: Refusal | None = None
+    errors: tuple[str, ...] = ()
+    command_id: int | None = None
+    plan: Plan | None = None
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# State and events out
+
+
+class Mode(StrEnum):
+    IDLE = "idle"  # standing, no plan
+    EXECUTING = "executing"  # a plan is running
+    ESTOP = "estop"  # e-stop latched: controlled stop, holding in place
+    FALLEN = "fallen"
+
+
+class Level(IntEnum):
+    """Severity of an event, as ROS diagnostic_msgs/DiagnosticStatus levels."""
+
+    OK = 0
+    WARN = 1
+    ERROR = 2
+    STALE = 3
+
+
+@dataclass(frozen=True)
+class ControlStats:
+    tick_p50_ms: float = 0.0
+    tick_p99_ms: float = 0.0
+    tick_max_ms: float = 0.0
+    ticks: int = 0
+    deadline_misses: int = 0
+    rtf: float = 0.0
+    control_hz: float = 0.0
+
+
+@dataclass(frozen=True)
+class ObjectPose:
+    name: str
+    position: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class RobotState:
+    """An immutable snapshot published by the control loop."""
+
+    sim_time_s: float
+    wall_time_s: float
+    mode: Mode
+    estop_latched: bool
+    base_position: tuple[float, float, float]
+    base_yaw_rad: float
+    tilt_deg: float
+    fallen: bool
+    qpos: tuple[float, ...]
+    objects: tuple[ObjectPose, ...]
+    held_object: str | None
+    plan: PlanStatus | None
+    control: ControlStats
+
+
+@dataclass(frozen=True)
+class Event:
+    """Something that happened, in order (`seq`), with a topic-like kind such as "estop/latched"."""
+
+    seq: int
+    kind: str
+    message: str
+    level: Level = Level.OK
+    wall_time_s: float = 0.0
+    sim_time_s: float = 0.0
+    data: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class RobotDescription:
+    """What a viewer needs to draw the robot and its world, and what a planner may talk about."""
+
+    model_name: str
+    seed: int
+    mj_model_bytes: bytes  # pickled mujoco.MjModel (self-contained, meshes included)
+    joint_names: tuple[str, ...]
+    places: tuple[str, ...]
+    objects: tuple[str, ...]
+    control_hz: float
+    physics_hz: float
+
+
+class EventSubscription(Protocol):
+    def get(self, timeout: float | None = None) -> Event | None: ...
+
+    def close(self) -> None: ...
+
+
+class RobotPort(Protocol):
+    """What `app/` may call on the robot side. Nothing else crosses the boundary."""
+
+    def submit(self, command: Command) -> CommandReply: ...
+
+    def state(self) -> RobotState: ...
+
+    def subscribe(self) -> EventSubscription: ...
+
+    def recent_events(self) -> list[Event]: ...
+
+    def describe(self) -> RobotDescription: ...

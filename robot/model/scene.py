@@ -1,0 +1,78 @@
+"""Builds the MuJoCo model of the OP3 in a seeded apartment with MjSpec (no model files copied)."""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+
+from robot.model import op3
+from robot.model.world import ROOM_X, ROOM_Y, Box, WorldLayout, WorldObject
+
+PHYSICS_TIMESTEP_S = 0.002  # 500 Hz
+# Elliptic cones with impratio 10 stop small objects creeping in a grasp (shared FINDINGS.md).
+IMPRATIO = 10.0
+
+
+def object_body_name(obj_name: str) -> str:
+    return "obj_" + obj_name.replace(" ", "_")
+
+
+def _add_box(parent: mujoco.MjsBody, box: Box) -> None:
+    parent.add_geom(
+        name=box.name,
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=[box.half_x, box.half_y, box.height / 2],
+        pos=[box.x, box.y, box.height / 2],
+        rgba=list(box.rgba),
+    )
+
+
+def _add_object(spec: mujoco.MjSpec, obj: WorldObject) -> None:
+    x, y, z = obj.position
+    body = spec.worldbody.add_body(name=object_body_name(obj.name), pos=[x, y, z + 0.001])
+    body.add_freejoint(name=object_body_name(obj.name) + "_free")
+    rgba = list(obj.rgba)
+    friction = [1.0, 0.01, 0.0001]
+    if obj.shape == "mug":
+        body.add_geom(type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[obj.radius, obj.height / 2],
+                      pos=[0, 0, obj.height / 2], mass=obj.mass * 0.85, rgba=rgba, friction=friction, condim=4)
+        body.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.006, 0.003, obj.height * 0.3],
+                      pos=[0, -(obj.radius + 0.006), obj.height / 2], mass=obj.mass * 0.15, rgba=rgba,
+                      friction=friction, condim=4)  # fmt: skip
+    elif obj.shape == "bottle":
+        body.add_geom(type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[obj.radius, obj.height * 0.35],
+                      pos=[0, 0, obj.height * 0.35], mass=obj.mass * 0.9, rgba=rgba, friction=friction, condim=4)
+        body.add_geom(type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[obj.radius * 0.45, obj.height * 0.15],
+                      pos=[0, 0, obj.height * 0.85], mass=obj.mass * 0.1, rgba=rgba, friction=friction, condim=4)
+    else:
+        body.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[obj.radius, 0, 0], pos=[0, 0, obj.radius],
+                      mass=obj.mass, rgba=rgba, friction=friction, condim=4)  # fmt: skip
+
+
+def build_scene_spec(layout: WorldLayout) -> mujoco.MjSpec:
+    """The OP3 standing at the layout's start pose in its apartment."""
+    spec = op3.load_op3_spec()
+    spec.modelname = f"op3_apartment_seed{layout.seed}"
+    spec.option.timestep = PHYSICS_TIMESTEP_S
+    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+    spec.option.impratio = IMPRATIO
+
+    world = spec.worldbody
+    world.add_light(pos=[0, 0, 3], dir=[0, 0, -1], type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL, diffuse=[0.6, 0.6, 0.6])
+    world.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[ROOM_X + 0.5, ROOM_Y + 0.5, 0.05],
+                   rgba=[0.78, 0.74, 0.68, 1.0])  # fmt: skip
+    for box in (*layout.walls, *layout.furniture, *layout.obstacles):
+        _add_box(world, box)
+    for obj in layout.objects:
+        _add_object(spec, obj)
+
+    x, y, yaw = layout.robot_start
+    trunk = spec.body(op3.TRUNK_BODY)
+    trunk.pos = [x, y, op3.STAND_TRUNK_HEIGHT]
+    trunk.quat = [math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)]
+    return spec
+
+
+def build_scene(layout: WorldLayout) -> mujoco.MjModel:
+    return build_scene_spec(layout).compile()

@@ -1,0 +1,1 @@
+"""Turning commands into plans, checking them, and executing them."""

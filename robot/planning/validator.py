@@ -1,0 +1,56 @@
+"""Checks a plan against the schema, the action vocabulary and the world before anything moves."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from robot.interface import Plan
+from robot.planning.schema import schema_errors
+from robot.planning.world_context import WorldContext
+
+
+def validate_plan_json(plan_json: Any, world: WorldContext) -> tuple[Plan | None, list[str]]:
+    """Returns (plan with canonical names, []) when valid, else (None, errors)."""
+    errors = schema_errors(plan_json)
+    if errors:
+        return None, errors
+    return validate_plan(Plan.from_dict(plan_json), world)
+
+
+def validate_plan(plan: Plan, world: WorldContext) -> tuple[Plan | None, list[str]]:
+    """Semantic checks: known places and objects, and an order that can work (pick before place)."""
+    errors: list[str] = []
+    held = world.held_object
+    canonical_steps = []
+    for i, step in enumerate(plan.steps, start=1):
+        args = dict(step.args)
+        if step.action == "navigate_to":
+            target = args["target"]
+            resolved = world.resolve_place(target) or world.resolve_object(target)
+            if resolved is None:
+                errors.append(f"step {i}: unknown place {target!r} (known: {', '.join(world.places)})")
+            else:
+                args["target"] = resolved
+        elif step.action in ("detect_object", "pick_object"):
+            resolved = world.resolve_object(args["object"])
+            if resolved is None:
+                errors.append(f"step {i}: unknown object {args['object']!r} (known: {', '.join(world.objects)})")
+            else:
+                args["object"] = resolved
+                if step.action == "pick_object":
+                    if held is not None:
+                        errors.append(f"step {i}: cannot pick {resolved!r} while holding {held!r}")
+                    held = resolved
+        elif step.action == "place_object":
+            resolved = world.resolve_place(args["location"])
+            if resolved is None:
+                errors.append(f"step {i}: unknown place {args['location']!r} (known: {', '.join(world.places)})")
+            else:
+                args["location"] = resolved
+            if held is None:
+                errors.append(f"step {i}: place_object before any pick_object: the robot holds nothing")
+            held = None
+        canonical_steps.append(type(step)(step.action, args))
+    if errors:
+        return None, errors
+    return Plan(tuple(canonical_steps)), []

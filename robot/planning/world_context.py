@@ -1,0 +1,44 @@
+"""What a planner and the validator may know about the world: named places and objects, and what is held."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+from robot.model.world import WorldLayout
+
+
+def normalize(text: str) -> str:
+    """Lower case, hyphens and punctuation to spaces, single spaces: 'Living-room table!' -> 'living room table'."""
+    return " ".join(re.sub(r"[^a-z0-9 ]+", " ", text.lower()).split())
+
+
+@dataclass(frozen=True)
+class WorldContext:
+    places: dict[str, tuple[str, ...]]  # canonical name -> aliases
+    objects: dict[str, tuple[str, ...]]
+    object_locations: dict[str, str]  # object -> place where it is believed to be
+    held_object: str | None = None
+
+    @staticmethod
+    def from_layout(layout: WorldLayout, held_object: str | None = None) -> WorldContext:
+        return WorldContext(
+            places={p.name: p.aliases for p in layout.places},
+            objects={o.name: o.aliases for o in layout.objects},
+            object_locations={o.name: o.place for o in layout.objects},
+            held_object=held_object,
+        )
+
+    def resolve_place(self, name: str) -> str | None:
+        return _resolve(name, self.places)
+
+    def resolve_object(self, name: str) -> str | None:
+        return _resolve(name, self.objects)
+
+
+def _resolve(name: str, table: dict[str, tuple[str, ...]]) -> str | None:
+    wanted = normalize(name)
+    for canonical, aliases in table.items():
+        if wanted == normalize(canonical) or wanted in (normalize(a) for a in aliases):
+            return canonical
+    return None

@@ -1,0 +1,103 @@
+"""MuJoCo backend: the simulated robot behind the same read/write/step calls a servo bus would offer.
+
+Only the control thread calls these methods; nothing else touches `MjData`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from robot.model import op3
+from robot.model.scene import build_scene, object_body_name
+from robot.model.world import WorldLayout
+
+# A biped is considered fallen beyond this trunk tilt or below this trunk height.
+FALL_TILT_DEG = 45.0
+FALL_HEIGHT_M = 0.15
+
+
+@dataclass(frozen=True)
+class Measurements:
+    """What the controller reads each tick."""
+
+    sim_time_s: float
+    joint_positions: np.ndarray  # (n_joints,) in op3.JOINT_NAMES order
+    joint_velocities: np.ndarray
+    base_position: np.ndarray  # (3,)
+    base_quat: np.ndarray  # (4,) wxyz
+
+    @property
+    def tilt_deg(self) -> float:
+        w, x, y, z = self.base_quat
+        # z component of the trunk's up axis in the world frame
+        up_z = 1.0 - 2.0 * (x * x + y * y)
+        return math.degrees(math.acos(max(-1.0, min(1.0, up_z))))
+
+    @property
+    def yaw_rad(self) -> float:
+        w, x, y, z = self.base_quat
+        return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+    @property
+    def fallen(self) -> bool:
+        return bool(self.tilt_deg > FALL_TILT_DEG or self.base_position[2] < FALL_HEIGHT_M)
+
+
+class MujocoSimBackend:
+    """The OP3 in its apartment, stepped at the physics rate, commanded through position actuators."""
+
+    def __init__(self, layout: WorldLayout, model: mujoco.MjModel | None = None) -> None:
+        self.layout = layout
+        self.model = model if model is not None else build_scene(layout)
+        self.data = mujoco.MjData(self.model)
+        self._joint_qpos = np.array([self.model.joint(n).qposadr[0] for n in op3.JOINT_NAMES])
+        self._joint_dof = np.array([self.model.joint(n).dofadr[0] for n in op3.JOINT_NAMES])
+        self._actuator = np.array([self.model.actuator(n + "_act").id for n in op3.JOINT_NAMES])
+        self._trunk = self.model.body(op3.TRUNK_BODY).id
+        self._object_bodies = {o.name: self.model.body(object_body_name(o.name)).id for o in layout.objects}
+        self.joint_names = op3.JOINT_NAMES
+        self.reset()
+
+    @property
+    def physics_dt(self) -> float:
+        return float(self.model.opt.timestep)
+
+    def reset(self) -> None:
+        """Robot standing at its start pose, objects where the layout puts them."""
+        mujoco.mj_resetData(self.model, self.data)
+        stand = self.stand_targets()
+        self.data.qpos[self._joint_qpos] = stand
+        self.data.ctrl[self._actuator] = stand
+        mujoco.mj_forward(self.model, self.data)
+
+    def stand_targets(self) -> np.ndarray:
+        posture = op3.stand_posture()
+        return np.array([posture[n] for n in op3.JOINT_NAMES])
+
+    def read(self) -> Measurements:
+        d = self.data
+        return Measurements(
+            sim_time_s=float(d.time),
+            joint_positions=d.qpos[self._joint_qpos].copy(),
+            joint_velocities=d.qvel[self._joint_dof].copy(),
+            base_position=d.qpos[0:3].copy(),
+            base_quat=d.qpos[3:7].copy(),
+        )
+
+    def write(self, joint_targets: np.ndarray) -> None:
+        self.data.ctrl[self._actuator] = joint_targets
+
+    def step(self, duration_s: float) -> None:
+        """Advance physics by `duration_s` (a whole number of physics steps)."""
+        n = max(1, int(round(duration_s / self.physics_dt)))
+        mujoco.mj_step(self.model, self.data, nstep=n)
+
+    def qpos(self) -> np.ndarray:
+        return self.data.qpos.copy()
+
+    def object_positions(self) -> dict[str, tuple[float, float, float]]:
+        return {name: tuple(float(v) for v in self.data.xpos[b]) for name, b in self._object_bodies.items()}

@@ -1,0 +1,178 @@
+// Mission-control page: state and events over one WebSocket; the e-stop goes over that socket first
+// (HTTP as a fallback) and is bound to pointerdown, so nothing waits for a click to complete.
+"use strict";
+
+const $ = (id) => document.getElementById(id);
+const humanoid = { ws: null, state: null, estopLatencies: [], events: [], config: null };
+window.humanoid = humanoid;
+
+// ---- 3D mirror in a cross-site iframe ------------------------------------------------------------------------
+// Software WebGL in the same page (or a same-site iframe) blocks this page's main thread for tens of ms per
+// frame and would delay the e-stop. 127.0.0.1 and localhost are different sites, so the iframe gets its own
+// renderer process when we swap one for the other.
+function sceneHost() {
+  const host = location.hostname;
+  if (host === "127.0.0.1") return { host: "localhost", crossSite: true };
+  if (host === "localhost") return { host: "127.0.0.1", crossSite: true };
+  return { host, crossSite: false };
+}
+
+async function loadConfig() {
+  const response = await fetch("/api/config");
+  humanoid.config = await response.json();
+  const port = humanoid.config.viser_port;
+  const frame = $("scene");
+  if (!port) {
+    $("scene-note").textContent = "The 3D mirror is disabled on this server.";
+    frame.hidden = true;
+    return;
+  }
+  const { host, crossSite } = sceneHost();
+  const url = `${location.protocol}//${host}:${port}/`;
+  frame.src = url;
+  $("scene-note").innerHTML = crossSite
+    ? `3D mirror from <a href="${url}" target="_blank" rel="noopener">${url}</a> (separate site: it cannot slow the e-stop).`
+    : `Open this page through 127.0.0.1 or localhost to keep the 3D view off the e-stop path, or use the ` +
+      `<a href="${url}" target="_blank" rel="noopener">3D view in its own tab</a>.`;
+}
+
+// ---- WebSocket -----------------------------------------------------------------------------------------------
+function connect() {
+  const ws = new WebSocket(`${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/ws`);
+  humanoid.ws = ws;
+  ws.onopen = () => setConn("connected", "badge-ok");
+  ws.onclose = () => { setConn("disconnected: retrying", "badge-err"); setTimeout(connect, 1000); };
+  ws.onmessage = (msg) => {
+    const m = JSON.parse(msg.data);
+    if (m.type === "state") renderState(m.state);
+    else if (m.type === "event") addEvent(m.event);
+    else if (m.type === "hello") { $("events").innerHTML = ""; m.recent_events.forEach(addEvent); }
+    else if (m.type === "estop_release_ack" && !m.accepted) showResult(m.message, true);
+  };
+}
+
+function setConn(text, cls) { const el = $("conn"); el.textContent = text; el.className = "badge " + cls; }
+
+// ---- e-stop --------------------------------------------------------------------------------------------------
+function pressEStop(ev) {
+  // The event's own timestamp: latency is measured from the moment the browser saw the press.
+  const clientTime = (performance.timeOrigin + (ev && ev.timeStamp ? ev.timeStamp : performance.now())) / 1000;
+  const ws = humanoid.ws;
+  if (ws && ws.readyState === WebSocket.OPEN) {
+    ws.send(JSON.stringify({ type: "estop", client_time_s: clientTime }));
+  } else {
+    fetch("/api/estop", { method: "POST", headers: { "Content-Type": "application/json" },
+      body: JSON.stringify({ source: "browser", client_time_s: clientTime }) });
+  }
+}
+
+async function releaseEStop() {
+  const r = await fetch("/api/estop/reset", { method: "POST" });
+  const body = await r.json();
+  showResult(r.ok ? body.message : (body.detail.message || JSON.stringify(body.detail)), !r.ok);
+}
+
+$("estop").addEventListener("pointerdown", pressEStop);
+$("estop").addEventListener("keydown", (ev) => { if (ev.key === "Enter") pressEStop(ev); });
+document.addEventListener("keydown", (ev) => {
+  if (ev.key === "Escape" || (ev.key === " " && document.activeElement.tagName !== "INPUT")) {
+    ev.preventDefault(); pressEStop(ev);
+  }
+});
+$("release").addEventListener("click", releaseEStop);
+
+// ---- commands ------------------------------------------------------------------------------------------------
+function showResult(text, isError) {
+  const el = $("command-result");
+  el.textContent = text;
+  el.className = "result " + (isError ? "error" : "ok");
+}
+
+function describeError(detail) {
+  if (typeof detail === "string") return detail;
+  if (Array.isArray(detail)) return detail.map((d) => d.msg).join("; ");
+  const errors = detail.errors && detail.errors.length ? ": " + detail.errors.join("; ") : "";
+  return (detail.message || "refused") + (errors && !errors.includes(detail.message) ? errors : "");
+}
+
+async function post(url, body) {
+  const r = await fetch(url, { method: "POST", headers: { "Content-Type": "application/json" },
+    body: body ? JSON.stringify(body) : undefined });
+  const data = await r.json().catch(() => ({ detail: r.statusText }));
+  return { ok: r.ok, data };
+}
+
+$("command-form").addEventListener("submit", async (ev) => {
+  ev.preventDefault();
+  const text = $("command-text").value.trim();
+  if (!text) return showResult("type a command first", true);
+  const { ok, data } = await post("/api/commands", { text, source: "typed" });
+  showResult(ok ? `accepted: ${data.message}` : describeError(data.detail), !ok);
+});
+$("replan").addEventListener("click", async () => {
+  const { ok, data } = await post("/api/replan");
+  showResult(ok ? `replanned: ${data.message}` : describeError(data.detail), !ok);
+});
+$("cancel").addEventListener("click", async () => {
+  const { data } = await post("/api/plan/cancel");
+  showResult(data.message, false);
+});
+
+// ---- rendering -----------------------------------------------------------------------------------------------
+const fmt = (v, d = 2) => (v === null || v === undefined ? "–" : Number(v).toFixed(d));
+
+function renderState(s) {
+  humanoid.state = s;
+  const latched = s.estop_latched;
+  $("mode").textContent = "mode: " + s.mode;
+  $("mode").className = "badge " + (latched || s.fallen ? "badge-err" : s.mode === "executing" ? "badge-warn" : "badge-ok");
+  $("latched-banner").hidden = !latched;
+  $("release").hidden = !latched;
+  $("estop").classList.toggle("latched", latched);
+  $("st-mode").textContent = s.mode + (s.fallen ? " (fallen)" : "");
+  $("st-pose").textContent = `x ${fmt(s.pose.x)} m, y ${fmt(s.pose.y)} m, z ${fmt(s.pose.z)} m, yaw ${fmt(s.pose.yaw_rad * 180 / Math.PI, 0)}°`;
+  $("st-tilt").textContent = `${fmt(s.tilt_deg, 1)}°`;
+  $("st-time").textContent = `${fmt(s.sim_time_s, 1)} s`;
+  $("st-rtf").textContent = fmt(s.control.rtf, 2);
+  $("st-tick").textContent = `${fmt(s.control.tick_p50_ms, 2)} / ${fmt(s.control.tick_p99_ms, 2)} ms, ${s.control.deadline_misses} missed`;
+  $("st-held").textContent = s.held_object || "nothing";
+  renderPlan(s.plan);
+}
+
+let lastPlanKey = "";
+function renderPlan(plan) {
+  const key = JSON.stringify(plan);
+  if (key === lastPlanKey) return;
+  lastPlanKey = key;
+  const list = $("plan-steps");
+  list.innerHTML = "";
+  if (!plan) { $("plan-text").textContent = "no plan yet"; $("plan-state").textContent = ""; return; }
+  $("plan-text").textContent = `"${plan.command_text}", plan ${plan.plan_id}, revision ${plan.revision}`;
+  $("plan-state").textContent = plan.state;
+  for (const step of plan.steps) {
+    const li = document.createElement("li");
+    li.dataset.state = step.state;
+    const arg = Object.values(step.args)[0];
+    li.innerHTML = `<code></code><span class="step-state st-${step.state}">${step.state}</span><span class="step-detail"></span>`;
+    li.querySelector("code").textContent = `${step.action}(${arg})`;
+    li.querySelector(".step-detail").textContent = step.detail || "";
+    list.appendChild(li);
+  }
+}
+
+function addEvent(e) {
+  humanoid.events.push(e);
+  if (e.kind === "estop/latched" && e.data.latency_ms !== undefined) {
+    humanoid.estopLatencies.push(e.data.latency_ms);
+    $("st-estop").textContent = `${fmt(e.data.latency_ms, 1)} ms (press to control loop)`;
+  }
+  const li = document.createElement("li");
+  li.className = "lvl-" + e.level;
+  li.textContent = `${new Date(e.wall_time_s * 1000).toLocaleTimeString()} [${e.kind}] ${e.message}`;
+  const list = $("events");
+  list.prepend(li);
+  while (list.children.length > 200) list.removeChild(list.lastChild);
+}
+
+loadConfig();
+connect();

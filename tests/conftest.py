@@ -1,0 +1,59 @@
+"""Shared fixtures. Building the MuJoCo scene costs seconds, so the model for seed 0 is built once per run."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+
+import mujoco
+import pytest
+from fastapi.testclient import TestClient
+
+from app.main import create_app
+from app.runtime import Runtime
+from app.settings import Settings
+from robot.model.scene import build_scene
+from robot.model.world import WorldLayout, generate_world
+from robot.sim.backend import MujocoSimBackend
+from robot.worker import RobotWorker
+
+
+@pytest.fixture(scope="session")
+def layout() -> WorldLayout:
+    return generate_world(0)
+
+
+@pytest.fixture(scope="session")
+def scene_model(layout: WorldLayout) -> mujoco.MjModel:
+    return build_scene(layout)
+
+
+@pytest.fixture
+def make_worker(layout: WorldLayout, scene_model: mujoco.MjModel) -> Iterator:
+    """Factory of started workers on a fresh simulation of seed 0; all are stopped at teardown."""
+    workers: list[RobotWorker] = []
+
+    def make(realtime: bool = True, **kwargs) -> RobotWorker:
+        worker = RobotWorker(layout, backend=MujocoSimBackend(layout, scene_model), realtime=realtime, **kwargs)
+        worker.start()
+        workers.append(worker)
+        return worker
+
+    yield make
+    for worker in workers:
+        worker.stop()
+
+
+@pytest.fixture
+def settings(tmp_path: Path) -> Settings:
+    return Settings(database_url=f"sqlite:///{tmp_path / 'test.db'}", enable_mirror=False, seed=0)
+
+
+@pytest.fixture
+def client(settings: Settings, make_worker) -> Iterator[TestClient]:
+    """The real app on a real (real-time) worker and a temporary SQLite DB; no 3D mirror."""
+    runtime = Runtime.start(settings, worker=make_worker(realtime=True))
+    with TestClient(create_app(settings, runtime=runtime)) as test_client:
+        test_client.runtime = runtime  # type: ignore[attr-defined]
+        yield test_client
+    runtime.stop()

@@ -1,0 +1,71 @@
+from __future__ import annotations
+
+import threading
+
+from robot.interface import Plan, PlanState, Step, StepState
+from robot.planning.executor import ExecutionContext, PlanExecutor, StepFailed, default_capabilities
+
+
+def make_context(said: list[str], cancel: threading.Event | None = None) -> ExecutionContext:
+    return ExecutionContext(cancel=cancel or threading.Event(), say=said.append, wait_sim=lambda s: None)
+
+
+def run(plan: Plan, capabilities=None, cancel=None) -> tuple[PlanState, list[tuple[int, StepState, str]], list[str]]:
+    said: list[str] = []
+    updates: list[tuple[int, StepState, str]] = []
+    result = PlanExecutor(capabilities or default_capabilities()).run(
+        plan, make_context(said, cancel), lambda i, s, d: updates.append((i, s, d))
+    )
+    return result, updates, said
+
+
+def final_states(updates) -> dict[int, StepState]:
+    return {i: s for i, s, _ in updates}
+
+
+def test_say_succeeds_and_is_spoken() -> None:
+    result, updates, said = run(Plan((Step("say", {"text": "hello"}),)))
+    assert result == PlanState.SUCCEEDED
+    assert said == ["hello"]
+    assert [s for _, s, _ in updates] == [StepState.RUNNING, StepState.SUCCEEDED]
+
+
+def test_unbuilt_capability_fails_honestly_and_skips_the_rest() -> None:
+    plan = Plan((Step("navigate_to", {"target": "kitchen counter"}), Step("say", {"text": "done"})))
+    result, updates, said = run(plan)
+    assert result == PlanState.FAILED
+    assert said == []  # the confirmation is never spoken for work that was not done
+    states = final_states(updates)
+    assert states == {0: StepState.FAILED, 1: StepState.SKIPPED}
+    reason = next(d for i, s, d in updates if s == StepState.FAILED)
+    assert "navigation is not available" in reason
+
+
+def test_capability_bug_fails_the_step_with_the_error() -> None:
+    def broken(args, ctx):
+        raise ZeroDivisionError("oops")
+
+    result, updates, _ = run(Plan((Step("say", {"text": "x"}),)), {"say": broken})
+    assert result == PlanState.FAILED
+    assert "ZeroDivisionError: oops" in updates[-1][2]
+
+
+def test_precise_failure_reason_is_kept() -> None:
+    def slipped(args, ctx):
+        raise StepFailed("grasp slipped")
+
+    result, updates, _ = run(Plan((Step("say", {"text": "x"}),)), {"say": slipped})
+    assert (result, updates[-1][1], updates[-1][2]) == (PlanState.FAILED, StepState.FAILED, "grasp slipped")
+
+
+def test_cancel_stops_before_the_next_step() -> None:
+    cancel = threading.Event()
+
+    def cancel_during(args, ctx):
+        cancel.set()
+        return "ok"
+
+    plan = Plan((Step("say", {"text": "a"}), Step("say", {"text": "b"})))
+    result, updates, _ = run(plan, {"say": cancel_during}, cancel)
+    assert result == PlanState.CANCELLED
+    assert final_states(updates) == {0: StepState.SUCCEEDED, 1: StepState.CANCELLED}

@@ -1,0 +1,129 @@
+"""The worker through its public interface only: commands in, state and events out."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from robot.interface import (
+    EStop,
+    ExecutePlan,
+    Mode,
+    PlanState,
+    Refusal,
+    ReleaseEStop,
+    Replan,
+    RunCommand,
+    StepState,
+)
+
+
+def wait_event(subscription, kind: str, timeout: float = 5.0):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        event = subscription.get(timeout=0.05)
+        if event is not None and event.kind == kind:
+            return event
+    raise AssertionError(f"no {kind} event within {timeout} s")
+
+
+def plan_done(command_id: int):
+    return lambda s: s.plan is not None and s.plan.command_id == command_id and s.plan.state != PlanState.RUNNING
+
+
+def test_worker_runs_in_real_time_and_stands(make_worker) -> None:
+    worker = make_worker(realtime=True)
+    assert worker.wait_for(lambda s: s.sim_time_s >= 1.2, 5.0)
+    state = worker.state()
+    assert state.mode == Mode.IDLE and not state.fallen
+    assert 0.8 < state.control.rtf < 1.2
+    assert state.control.ticks >= 90  # statistics refresh once a second
+
+
+def test_say_command_runs_to_success_with_per_step_status(make_worker) -> None:
+    worker = make_worker(realtime=False)
+    events = worker.subscribe()
+    reply = worker.submit(RunCommand("say hello"))
+    assert reply.accepted
+    assert worker.wait_for(plan_done(reply.command_id), 10.0)
+    plan = worker.state().plan
+    assert plan.state == PlanState.SUCCEEDED
+    assert [(s.action, s.state) for s in plan.steps] == [("say", StepState.SUCCEEDED)]
+    assert wait_event(events, "speech/say").data["text"] == "hello"
+
+
+def test_capstone_fails_honestly_until_walking_exists(make_worker) -> None:
+    worker = make_worker(realtime=False)
+    reply = worker.submit(RunCommand("pick up the red mug from the kitchen counter"))
+    assert worker.wait_for(plan_done(reply.command_id), 10.0)
+    plan = worker.state().plan
+    assert plan.state == PlanState.FAILED
+    assert plan.steps[0].state == StepState.FAILED and "cannot walk" in plan.steps[0].detail
+    assert all(s.state == StepState.SKIPPED for s in plan.steps[1:])
+    assert worker.state().held_object is None
+
+
+def test_invalid_command_is_refused_and_changes_nothing(make_worker) -> None:
+    worker = make_worker(realtime=False)
+    before = worker.state().plan
+    reply = worker.submit(RunCommand("pick up the purple elephant"))
+    assert not reply.accepted and reply.refusal == Refusal.INVALID
+    assert "purple elephant" in reply.errors[0]
+    reply = worker.submit(ExecutePlan({"steps": [{"action": "teleport", "args": {"target": "x"}}]}))
+    assert not reply.accepted and "unknown action 'teleport'" in reply.errors[0]
+    assert worker.state().plan == before
+
+
+def test_estop_is_applied_before_the_next_physics_step(make_worker) -> None:
+    worker = make_worker(realtime=True)
+    events = worker.subscribe()
+    worker.submit(RunCommand("say this is a long sentence that takes a few seconds to speak out loud"))
+    assert worker.wait_for(lambda s: s.mode == Mode.EXECUTING, 5.0)
+    sim_time_at_press = worker.state().sim_time_s
+    assert worker.submit(EStop(source="test", client_time_s=time.time())).accepted
+    latched = wait_event(events, "estop/latched")
+    # Applied at the sim time of the press (at most the tick already under way), not a tick later.
+    assert latched.sim_time_s <= sim_time_at_press + 1.0 / worker.control_hz + 1e-9
+    assert latched.data["latency_ms"] >= 0
+    assert worker.wait_for(lambda s: s.mode == Mode.ESTOP and s.plan.state == PlanState.CANCELLED, 2.0)
+    assert worker.state().plan.steps[0].state == StepState.CANCELLED
+
+
+def test_latched_estop_refuses_motion_and_release_restarts_nothing(make_worker) -> None:
+    worker = make_worker(realtime=True)
+    worker.submit(RunCommand("say hello"))
+    worker.submit(EStop(source="test"))
+    assert worker.wait_for(lambda s: s.estop_latched, 2.0)
+    for command in (RunCommand("say hi"), Replan(), ExecutePlan({"steps": [{"action": "say", "args": {"text": "x"}}]})):
+        reply = worker.submit(command)
+        assert not reply.accepted and reply.refusal == Refusal.ESTOP_LATCHED
+    assert worker.submit(EStop(source="again")).accepted  # idempotent
+
+    frozen = np.array(worker.state().qpos)
+    assert worker.submit(ReleaseEStop()).accepted
+    assert worker.submit(ReleaseEStop()).refusal == Refusal.NOT_LATCHED
+    time.sleep(0.5)
+    state = worker.state()
+    assert state.mode == Mode.IDLE and state.plan.state == PlanState.CANCELLED  # nothing resumed by itself
+    assert np.max(np.abs(np.array(state.qpos)[7:] - frozen[7:])) < 0.02
+
+
+def test_replan_reruns_the_current_command_as_a_new_revision(make_worker) -> None:
+    worker = make_worker(realtime=False)
+    assert worker.submit(Replan()).refusal == Refusal.NOTHING_TO_REPLAN
+    first = worker.submit(RunCommand("say hello"))
+    assert worker.wait_for(plan_done(first.command_id), 10.0)
+    again = worker.submit(Replan())
+    assert again.accepted and again.command_id == first.command_id
+    assert worker.wait_for(lambda s: s.plan.revision == 2 and s.plan.state == PlanState.SUCCEEDED, 10.0)
+
+
+def test_a_new_command_preempts_the_running_plan(make_worker) -> None:
+    worker = make_worker(realtime=True)
+    first = worker.submit(RunCommand("say this sentence is long enough to still be running in a moment"))
+    assert worker.wait_for(lambda s: s.mode == Mode.EXECUTING, 5.0)
+    second = worker.submit(RunCommand("say hi"))
+    assert worker.wait_for(plan_done(second.command_id), 10.0)
+    assert worker.state().plan.state == PlanState.SUCCEEDED
+    assert first.command_id != second.command_id

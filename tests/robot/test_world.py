@@ -1,0 +1,46 @@
+from __future__ import annotations
+
+import pytest
+
+from robot.model.world import KITCHEN_COUNTER, generate_world, occupancy_grid, reachable
+
+
+def test_same_seed_same_world_and_different_seeds_differ() -> None:
+    assert generate_world(7) == generate_world(7)
+    placements = {tuple(o.position for o in generate_world(s).objects) for s in range(10)}
+    obstacles = {tuple((b.x, b.y) for b in generate_world(s).obstacles) for s in range(10)}
+    assert len(placements) == 10
+    assert len(obstacles) == 10
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_every_seed_is_solvable(seed: int) -> None:
+    world = generate_world(seed)
+    assert {"kitchen counter", "living-room table", "charging dock"} <= set(world.place_names)
+    assert {"red mug", "blue bottle", "green apple"} <= set(world.object_names)
+    assert len(world.obstacles) >= 3
+    assert reachable(world, [p.staging for p in world.places])
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_objects_stand_on_the_counter_within_reach_of_its_front(seed: int) -> None:
+    front = KITCHEN_COUNTER.x - KITCHEN_COUNTER.half_x
+    for obj in generate_world(seed).objects:
+        x, y, z = obj.position
+        assert obj.place == "kitchen counter"
+        assert z == pytest.approx(KITCHEN_COUNTER.height)
+        assert 0.05 <= x - front <= 0.13
+        assert abs(y - KITCHEN_COUNTER.y) <= KITCHEN_COUNTER.half_y
+
+
+def test_a_walled_in_goal_is_reported_unreachable() -> None:
+    world = generate_world(0)
+    grid, _, _ = occupancy_grid(world)
+    assert grid.any() and not grid.all()
+    # The inside of the counter is blocked for the robot's centre.
+    assert not reachable(world, [(KITCHEN_COUNTER.x, KITCHEN_COUNTER.y)])
+
+
+def test_negative_seed_is_refused() -> None:
+    with pytest.raises(ValueError, match="seed"):
+        generate_world(-1)
