@@ -6,6 +6,7 @@ from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 
 from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
@@ -58,6 +59,13 @@ class _TooLarge(Exception):
     pass
 
 
+async def _validation_error(request: Request, exc: Exception) -> JSONResponse:
+    """422 with where and why, without echoing the input (it may be huge, or NaN, which JSON cannot carry)."""
+    assert isinstance(exc, RequestValidationError)
+    errors = [{"loc": list(e["loc"]), "msg": e["msg"], "type": e["type"]} for e in exc.errors()]
+    return JSONResponse({"detail": errors}, status_code=422)
+
+
 def create_app(settings: Settings | None = None, runtime: Runtime | None = None) -> FastAPI:
     """The app. Pass `runtime` to serve an already-started robot (tests); otherwise the lifespan starts one."""
     settings = settings or get_settings()
@@ -79,6 +87,7 @@ def create_app(settings: Settings | None = None, runtime: Runtime | None = None)
         lifespan=lifespan,
     )
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
+    app.add_exception_handler(RequestValidationError, _validation_error)
     app.include_router(robot.router)
     app.include_router(sessions.router)
     app.include_router(ws_router)

@@ -1,0 +1,158 @@
+"""The HTTP API against a real worker (real time) and a temporary SQLite database."""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+
+
+def wait_until(predicate, timeout: float = 5.0, interval: float = 0.05):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        value = predicate()
+        if value:
+            return value
+        time.sleep(interval)
+    raise AssertionError("condition not met in time")
+
+
+def plan_state(client) -> dict | None:
+    return client.get("/api/state").json()["plan"]
+
+
+def test_health_reports_the_control_loop(client) -> None:
+    body = wait_until(lambda: (b := client.get("/api/health").json())["control"]["ticks"] > 0 and b)
+    assert body["status"] == "ok" and body["mode"] == "idle"
+    assert body["control"]["control_hz"] == 100.0
+    assert body["session_id"] >= 1
+
+
+def test_config_names_places_and_objects(client) -> None:
+    body = client.get("/api/config").json()
+    assert body["places"] == ["kitchen counter", "living-room table", "charging dock"]
+    assert set(body["objects"]) == {"red mug", "blue bottle", "green apple"}
+    assert body["physics_hz"] == pytest.approx(500.0)
+
+
+def test_openapi_lists_the_endpoints(client) -> None:
+    paths = client.get("/openapi.json").json()["paths"]
+    for path in ("/api/health", "/api/commands", "/api/estop", "/api/estop/reset", "/api/replan",
+                 "/api/sessions", "/api/sessions/{session_id}"):  # fmt: skip
+        assert path in paths
+
+
+def test_command_is_planned_and_executed(client) -> None:
+    response = client.post("/api/commands", json={"text": "say hello operator"})
+    assert response.status_code == 202
+    assert response.json()["plan"] == {"steps": [{"action": "say", "args": {"text": "hello operator"}}]}
+    plan = wait_until(lambda: (p := plan_state(client)) and p["state"] == "succeeded" and p)
+    assert plan["steps"][0]["state"] == "succeeded"
+
+
+def test_unbuilt_capability_is_reported_not_faked(client) -> None:
+    assert client.post("/api/commands", json={"text": "go to the dock"}).status_code == 202
+    plan = wait_until(lambda: (p := plan_state(client)) and p["state"] == "failed" and p)
+    assert plan["steps"][0]["state"] == "failed" and "cannot walk" in plan["steps"][0]["detail"]
+    assert plan["steps"][1]["state"] == "skipped"
+
+
+@pytest.mark.parametrize(
+    ("body", "status", "fragment"),
+    [
+        ({"text": "pick up the purple elephant"}, 422, "unknown object 'purple elephant'"),
+        ({"text": "fly to the moon"}, 422, "I don't understand"),
+        ({"plan": {"steps": [{"action": "teleport", "args": {"target": "x"}}]}}, 422, "unknown action 'teleport'"),
+        ({"plan": {"steps": [{"action": "navigate_to", "args": {"target": "attic"}}]}}, 422, "unknown place"),
+        ({"text": "x" * 501}, 422, "at most 500 characters"),
+        ({"text": "say hi", "speed": 9}, 422, "Extra inputs are not permitted"),
+        ({"text": 42}, 422, "valid string"),
+    ],
+)
+def test_bad_commands_get_a_clear_4xx_and_change_nothing(client, body, status: int, fragment: str) -> None:
+    before = plan_state(client)
+    response = client.post("/api/commands", json=body)
+    assert response.status_code == status
+    assert fragment in response.text
+    assert plan_state(client) == before
+
+
+def test_malformed_and_oversized_bodies_are_refused(client) -> None:
+    response = client.post("/api/commands", content=b"{not json", headers={"Content-Type": "application/json"})
+    assert response.status_code == 422
+    huge = b'{"text": "' + b"a" * 100_000 + b'"}'
+    response = client.post("/api/commands", content=huge, headers={"Content-Type": "application/json"})
+    assert response.status_code == 413
+    assert "larger than" in response.json()["detail"]
+
+
+def test_estop_latches_refuses_commands_and_release_is_explicit(client) -> None:
+    assert client.post("/api/estop", json={"source": "test"}).status_code == 200
+    state = wait_until(lambda: (s := client.get("/api/state").json())["estop_latched"] and s)
+    assert state["mode"] == "estop"
+
+    refused = client.post("/api/commands", json={"text": "say hello"})
+    assert refused.status_code == 409
+    assert refused.json()["detail"]["refusal"] == "estop_latched"
+    assert client.post("/api/replan").status_code == 409
+
+    assert client.post("/api/estop/reset").status_code == 200
+    assert client.post("/api/estop/reset").status_code == 409  # not latched any more
+    time.sleep(0.2)
+    assert client.get("/api/state").json()["mode"] == "idle"  # release restarted nothing
+    assert client.post("/api/commands", json={"text": "say back to work"}).status_code == 202
+
+
+def test_estop_rejects_non_finite_client_time(client) -> None:
+    response = client.post("/api/estop", content=b'{"client_time_s": NaN}', headers={"Content-Type": "application/json"})
+    assert response.status_code == 422
+    assert not client.get("/api/state").json()["estop_latched"]
+
+
+def test_replan_after_estop_resumes_the_current_command(client) -> None:
+    client.post("/api/commands", json={"text": "say a sentence long enough to be interrupted by the e-stop"})
+    wait_until(lambda: client.get("/api/state").json()["mode"] == "executing")
+    client.post("/api/estop")
+    cancelled = wait_until(lambda: (p := plan_state(client)) and p["state"] == "cancelled" and p)
+    client.post("/api/estop/reset")
+    response = client.post("/api/replan")
+    assert response.status_code == 202
+    plan = wait_until(lambda: (p := plan_state(client)) and p["revision"] == 2 and p["state"] == "succeeded" and p)
+    assert plan["command_id"] == cancelled["command_id"]
+
+
+def test_sessions_record_commands_plans_steps_and_events(client) -> None:
+    client.post("/api/commands", json={"text": "say recorded"})
+    wait_until(lambda: (p := plan_state(client)) and p["state"] == "succeeded")
+    client.post("/api/commands", json={"text": "pick up the purple elephant"})
+    client.post("/api/estop")
+    session_id = client.get("/api/health").json()["session_id"]
+
+    def recorded():
+        detail = client.get(f"/api/sessions/{session_id}").json()
+        kinds = {e["kind"] for e in detail["events"]}
+        return {"plan/finished", "estop/latched"} <= kinds and detail["state_sample_count"] > 0 and detail
+
+    detail = wait_until(recorded)
+    assert [(c["text"], c["accepted"]) for c in detail["commands"]] == [
+        ("say recorded", True),
+        ("pick up the purple elephant", False),
+    ]
+    assert "purple elephant" in detail["commands"][1]["errors"][0]
+    assert detail["plans"][0]["plan"]["steps"][0]["action"] == "say"
+    assert detail["plans"][0]["state"] == "succeeded"
+    assert detail["plans"][0]["steps"][0]["state"] == "succeeded"
+
+    listing = client.get("/api/sessions").json()
+    assert listing["total"] >= 1
+    assert listing["items"][0]["id"] == session_id
+    assert listing["items"][0]["estop_count"] == 1
+    assert client.get("/api/sessions/999999").status_code == 404
+    assert client.get("/api/sessions?limit=0").status_code == 422
+
+
+def test_pages_are_served(client) -> None:
+    page = client.get("/")
+    assert page.status_code == 200 and 'id="estop"' in page.text
+    assert client.get("/sessions").status_code == 200
+    assert client.get("/static/js/app.js").status_code == 200

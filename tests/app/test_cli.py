@@ -1,0 +1,45 @@
+"""`humanoid run` end to end in a subprocess, as a user runs it."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+RESULT_KEYS = {"success", "transcript", "plan", "steps", "sim_time_s", "wall_time_s", "fell", "held_object",
+               "session_id"}  # fmt: skip
+
+
+def humanoid(tmp_path, *args: str) -> subprocess.CompletedProcess:
+    env = {**os.environ, "DATABASE_URL": f"sqlite:///{tmp_path / 'cli.db'}"}
+    return subprocess.run([sys.executable, "-m", "app.cli", *args], capture_output=True, text=True, env=env,
+                          timeout=120)  # fmt: skip
+
+
+def test_run_prints_the_result_and_records_a_session(tmp_path) -> None:
+    done = humanoid(tmp_path, "run", "say hello from the cli", "--seed", "3", "--json")
+    assert done.returncode == 0, done.stderr
+    result = json.loads(done.stdout)
+    assert RESULT_KEYS <= result.keys()
+    assert result["success"] is True and result["fell"] is False
+    assert result["steps"] == [{"action": "say", "args": {"text": "hello from the cli"}, "status": "succeeded",
+                                "detail": 'said "hello from the cli"'}]  # fmt: skip
+    assert result["session_id"] == 1 and result["sim_time_s"] > 0
+
+    second = json.loads(humanoid(tmp_path, "run", "pick up the red mug from the kitchen counter", "--json").stdout)
+    assert second["session_id"] == 2
+    assert second["success"] is False and second["held_object"] is None
+    assert [s["status"] for s in second["steps"]] == ["failed", "skipped", "skipped", "skipped"]
+
+
+def test_run_with_an_unknown_object_fails_clearly(tmp_path) -> None:
+    done = humanoid(tmp_path, "run", "pick up the purple elephant", "--json")
+    assert done.returncode == 1
+    result = json.loads(done.stdout)
+    assert result["success"] is False and "purple elephant" in result["error"]
+
+
+def test_bad_arguments_are_refused(tmp_path) -> None:
+    done = humanoid(tmp_path, "run", "say hi", "--seed", "-2")
+    assert done.returncode == 2 and "--seed must be >= 0" in done.stderr

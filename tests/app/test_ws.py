@@ -1,0 +1,43 @@
+from __future__ import annotations
+
+import time
+
+
+def receive_until(ws, predicate, limit: int = 200):
+    for _ in range(limit):
+        message = ws.receive_json()
+        if predicate(message):
+            return message
+    raise AssertionError("expected message not received")
+
+
+def test_socket_streams_state_and_takes_the_estop(client) -> None:
+    with client.websocket_connect("/ws") as ws:
+        hello = ws.receive_json()
+        assert hello["type"] == "hello" and hello["session_id"] >= 1
+        state = receive_until(ws, lambda m: m["type"] == "state")
+        assert state["state"]["mode"] == "idle"
+
+        ws.send_json({"type": "estop", "client_time_s": time.time()})
+        ack = receive_until(ws, lambda m: m["type"] == "estop_ack")
+        assert ack["accepted"]
+        latched = receive_until(ws, lambda m: m["type"] == "event" and m["event"]["kind"] == "estop/latched")
+        assert latched["event"]["data"]["source"] == "browser"
+        assert 0 <= latched["event"]["data"]["latency_ms"] < 1000
+        receive_until(ws, lambda m: m["type"] == "state" and m["state"]["estop_latched"])
+
+        ws.send_json({"type": "estop_release"})
+        assert receive_until(ws, lambda m: m["type"] == "estop_release_ack")["accepted"]
+
+
+def test_socket_answers_bad_messages_without_closing(client) -> None:
+    with client.websocket_connect("/ws") as ws:
+        ws.receive_json()
+        ws.send_text("not json")
+        assert receive_until(ws, lambda m: m["type"] == "error")["message"].startswith("expected a JSON object")
+        ws.send_json({"type": "dance"})
+        assert "unknown message type" in receive_until(ws, lambda m: m["type"] == "error")["message"]
+        ws.send_text("x" * 5000)
+        assert "larger than" in receive_until(ws, lambda m: m["type"] == "error")["message"]
+        ws.send_json({"type": "ping", "t": 1})
+        assert receive_until(ws, lambda m: m["type"] == "pong")["t"] == 1
