@@ -7,7 +7,6 @@ poses in its own MjData, so it never touches the worker's simulation. mjviser bu
 from __future__ import annotations
 
 import logging
-import pickle
 import threading
 import time
 
@@ -26,7 +25,7 @@ class SceneMirror:
         description = port.describe()
         self._port = port
         self._period = 1.0 / rate_hz
-        self.model: mujoco.MjModel = pickle.loads(description.mj_model_bytes)
+        self.model = mujoco.MjModel.from_xml_string(description.mjcf_xml)
         self.data = mujoco.MjData(self.model)
         self.server = viser.ViserServer(host=host, port=viser_port, label="humanoid mirror", verbose=False)
         self.server.initial_camera.position = (-3.2, -2.8, 3.0)

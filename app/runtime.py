@@ -12,7 +12,9 @@ from app.mirror import SceneMirror
 from app.sessions.db import make_engine, make_session_factory, upgrade_to_head
 from app.sessions.recorder import SessionRecorder
 from app.settings import Settings
+from robot.interface import RobotPort
 from robot.model.world import generate_world
+from robot.process import WorkerProcess
 from robot.worker import RobotWorker
 
 log = logging.getLogger(__name__)
@@ -21,19 +23,24 @@ log = logging.getLogger(__name__)
 @dataclass
 class Runtime:
     settings: Settings
-    worker: RobotWorker
+    worker: RobotPort
     engine: Engine
     db: sessionmaker
     recorder: SessionRecorder
     mirror: SceneMirror | None
 
     @staticmethod
-    def start(settings: Settings, worker: RobotWorker | None = None) -> Runtime:
-        """Migrate the DB, start the robot worker (unless given one), the session recorder and the mirror."""
+    def start(settings: Settings, worker: RobotPort | None = None) -> Runtime:
+        """Migrate the DB, start the robot worker (in its own process unless given one), the recorder, the mirror."""
         upgrade_to_head(settings.database_url)
         engine = make_engine(settings.database_url)
         db = make_session_factory(engine)
-        worker = worker or RobotWorker(generate_world(settings.seed), realtime=True, control_hz=settings.control_hz)
+        if worker is None:
+            worker = (
+                WorkerProcess(settings.seed, control_hz=settings.control_hz)
+                if settings.worker_process
+                else RobotWorker(generate_world(settings.seed), realtime=True, control_hz=settings.control_hz)
+            )
         worker.start()
         recorder = SessionRecorder(db, worker, kind="serve", seed=settings.seed, backend=settings.backend,
                                    sample_hz=settings.state_sample_hz)  # fmt: skip

@@ -62,6 +62,14 @@ class EventBus:
             subscriber.put(event)
         return event
 
+    def forward(self, event: Event) -> None:
+        """Re-publish an event that was numbered elsewhere (e.g. by the worker in its own process)."""
+        with self._lock:
+            self._history.append(event)
+            subscribers = list(self._subscribers)
+        for subscriber in subscribers:
+            subscriber.put(event)
+
     def subscribe(self) -> Subscription:
         subscription = Subscription(self)
         with self._lock:

@@ -129,6 +129,7 @@ class Refusal(StrEnum):
     INVALID = "invalid"  # 422
     NOTHING_TO_REPLAN = "nothing_to_replan"  # 409
     NOT_LATCHED = "not_latched"  # 409
+    UNAVAILABLE = "unavailable"  # 503: the worker does not answer
 
 
 @dataclass(frozen=True)
@@ -216,7 +217,7 @@ class RobotDescription:
 
     model_name: str
     seed: int
-    mj_model_bytes: bytes  # pickled mujoco.MjModel (self-contained, meshes included)
+    mjcf_xml: str  # the compiled scene as MJCF; mesh files are referenced by absolute path
     joint_names: tuple[str, ...]
     places: tuple[str, ...]
     objects: tuple[str, ...]
@@ -231,7 +232,15 @@ class EventSubscription(Protocol):
 
 
 class RobotPort(Protocol):
-    """What `app/` may call on the robot side. Nothing else crosses the boundary."""
+    """What `app/` may call on the robot side. Nothing else crosses the boundary.
+
+    Implemented in-process by `robot.worker.RobotWorker` and across a process boundary by
+    `robot.process.WorkerProcess`.
+    """
+
+    def start(self) -> None: ...
+
+    def stop(self) -> None: ...
 
     def submit(self, command: Command) -> CommandReply: ...
 

@@ -10,7 +10,6 @@
 
 from __future__ import annotations
 
-import pickle
 import queue
 import threading
 import time
@@ -18,6 +17,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from robot.control.posture import PostureController
+from robot.control.priority import raise_thread_priority
 from robot.control.stats import LoopStats
 from robot.events import EventBus, Subscription
 from robot.interface import (
@@ -42,6 +42,7 @@ from robot.interface import (
     StepState,
     StepStatus,
 )
+from robot.model.scene import scene_xml
 from robot.model.world import WorldLayout
 from robot.planning.executor import Cancelled, Capability, ExecutionContext, PlanExecutor, default_capabilities
 from robot.planning.planner import Planner, PlanningError
@@ -166,7 +167,7 @@ class RobotWorker:
             self._description = RobotDescription(
                 model_name="robotis_op3",
                 seed=self.layout.seed,
-                mj_model_bytes=pickle.dumps(self.backend.model),
+                mjcf_xml=scene_xml(self.layout),
                 joint_names=tuple(self.backend.joint_names),
                 places=self.layout.place_names,
                 objects=self.layout.object_names,
@@ -427,6 +428,10 @@ class RobotWorker:
     # control thread
 
     def _control_loop(self) -> None:
+        if self.realtime:
+            priority = raise_thread_priority()
+            self._bus.publish("control/priority", f"control loop at {self.control_hz:.0f} Hz with {priority}",
+                              Level.OK if priority.startswith("real-time") else Level.WARN)  # fmt: skip
         next_deadline = time.perf_counter() + self.dt
         while not self._stop.is_set():
             if self.realtime:

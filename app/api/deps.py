@@ -13,6 +13,7 @@ REFUSAL_STATUS = {
     Refusal.NOT_LATCHED: 409,
     Refusal.NOTHING_TO_REPLAN: 409,
     Refusal.INVALID: 422,
+    Refusal.UNAVAILABLE: 503,
 }
 
 

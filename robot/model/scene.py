@@ -76,3 +76,10 @@ def build_scene_spec(layout: WorldLayout) -> mujoco.MjSpec:
 
 def build_scene(layout: WorldLayout) -> mujoco.MjModel:
     return build_scene_spec(layout).compile()
+
+
+def scene_xml(layout: WorldLayout) -> str:
+    """The scene as one MJCF string that compiles anywhere on this machine (mesh paths made absolute)."""
+    spec = build_scene_spec(layout)
+    spec.meshdir = str(op3.op3_asset_dir() / "assets")
+    return spec.to_xml()

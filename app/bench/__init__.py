@@ -1,0 +1,26 @@
+"""`humanoid bench SUITE`: measured figures written as JSON (targets live here, never in timed unit tests)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+
+def run_suite(suite: str, args: argparse.Namespace) -> int:
+    if suite == "core":
+        from app.bench.core import run_core
+
+        result = run_core(presses=args.presses, viewers=args.viewers, duration_s=args.duration)
+    else:  # pragma: no cover - argparse restricts the choices
+        raise SystemExit(f"unknown suite {suite}")
+    text = json.dumps(result, indent=2)
+    if args.output:
+        Path(args.output).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.output).write_text(text + "\n")
+    if args.json or not args.output:
+        print(text)
+    else:
+        print(f"wrote {args.output}", file=sys.stderr)
+    return 0

@@ -1,0 +1,69 @@
+"""Starts the real server (`humanoid serve`) in a subprocess on free ports, for benchmarks and end-to-end tests."""
+
+from __future__ import annotations
+
+import os
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+from types import TracebackType
+
+import httpx
+
+STARTUP_TIMEOUT_S = 120.0
+
+
+def free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return int(sock.getsockname()[1])
+
+
+class ServerProcess:
+    """`with ServerProcess(workdir) as server:` gives a running app at `server.url`, stopped on exit."""
+
+    def __init__(self, workdir: Path, seed: int = 0, extra_env: dict[str, str] | None = None) -> None:
+        self.workdir = Path(workdir)
+        self.port = free_port()
+        self.viser_port = free_port()
+        self.url = f"http://127.0.0.1:{self.port}"
+        self.seed = seed
+        self.log_path = self.workdir / "server.log"
+        self._env = {**os.environ, "DATABASE_URL": f"sqlite:///{self.workdir / 'server.db'}", **(extra_env or {})}
+        self._process: subprocess.Popen | None = None
+
+    def __enter__(self) -> ServerProcess:
+        self.workdir.mkdir(parents=True, exist_ok=True)
+        log = self.log_path.open("w")
+        command = [sys.executable, "-m", "app.cli", "serve", "--port", str(self.port),
+                   "--viser-port", str(self.viser_port), "--seed", str(self.seed)]  # fmt: skip
+        self._process = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, env=self._env)
+        deadline = time.monotonic() + STARTUP_TIMEOUT_S
+        while time.monotonic() < deadline:
+            if self._process.poll() is not None:
+                raise RuntimeError(f"server exited with {self._process.returncode}: {self.log_path.read_text()}")
+            try:
+                if httpx.get(self.url + "/api/health", timeout=1.0).status_code == 200:
+                    return self
+            except httpx.HTTPError:
+                pass
+            time.sleep(0.2)
+        self.__exit__(None, None, None)
+        raise RuntimeError(f"server did not start in {STARTUP_TIMEOUT_S} s: {self.log_path.read_text()}")
+
+    def __exit__(self, exc_type: type | None, exc: BaseException | None, tb: TracebackType | None) -> None:
+        if self._process and self._process.poll() is None:
+            self._process.terminate()
+            try:
+                self._process.wait(timeout=15)
+            except subprocess.TimeoutExpired:
+                self._process.kill()
+                self._process.wait()
+
+    def get(self, path: str) -> dict:
+        return httpx.get(self.url + path, timeout=5.0).json()
+
+    def post(self, path: str, json: dict | None = None) -> httpx.Response:
+        return httpx.post(self.url + path, json=json, timeout=5.0)

@@ -1,0 +1,257 @@
+"""The robot worker in its own process, behind the same `RobotPort` interface.
+
+Why: the web server, the 3D mirror and the browsers' WebSockets all run Python threads; in one process they
+compete with the control loop for the interpreter lock and made it miss deadlines. In its own process the control
+loop only shares the lock with the robot's own threads.
+
+Wire protocol over one duplex pipe (pickled tuples):
+  parent -> child: ("cmd", id, Command) | ("stop",)
+  child -> parent: ("ready", RobotDescription, RobotState) | ("reply", id, CommandReply) | ("state", RobotState)
+                   | ("event", Event) | ("fatal", str)
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+import multiprocessing as mp
+import threading
+import time
+import traceback
+from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import TimeoutError as FutureTimeout
+from multiprocessing.connection import Connection
+from typing import Any
+
+from robot.events import EventBus, Subscription
+from robot.interface import (
+    CancelPlan,
+    Command,
+    CommandReply,
+    EStop,
+    Event,
+    Refusal,
+    ReleaseEStop,
+    RobotDescription,
+    RobotState,
+)
+
+log = logging.getLogger(__name__)
+
+STATE_PERIOD_S = 0.01  # state snapshots sent to the parent at up to 100 Hz
+REPLY_TIMEOUT_S = 30.0  # planning may take a while (an LLM); the e-stop never waits behind it
+STARTUP_TIMEOUT_S = 180.0
+# Commands that must never queue behind a slow one: handled inline by the child's receiving thread.
+_IMMEDIATE = (EStop, ReleaseEStop, CancelPlan)
+
+
+class WorkerProcess:
+    """Parent-side proxy of a `RobotWorker` running in a child process."""
+
+    def __init__(self, seed: int, control_hz: float = 100.0, realtime: bool = True) -> None:
+        self._seed = seed
+        self._control_hz = control_hz
+        self._realtime = realtime
+        self._bus = EventBus()
+        self._ids = itertools.count(1)
+        self._pending: dict[int, Future[CommandReply]] = {}
+        self._pending_lock = threading.Lock()
+        self._send_lock = threading.Lock()
+        self._state: RobotState | None = None
+        self._state_changed = threading.Condition()
+        self._description: RobotDescription | None = None
+        self._process: mp.process.BaseProcess | None = None
+        self._conn: Connection | None = None
+        self._reader: threading.Thread | None = None
+        self.alive = False
+
+    # lifecycle -------------------------------------------------------------------------------------------------
+
+    def start(self) -> None:
+        context = mp.get_context("spawn")  # never fork a process that already runs threads
+        parent_conn, child_conn = context.Pipe(duplex=True)
+        self._process = context.Process(
+            target=child_main,
+            args=(child_conn, self._seed, self._control_hz, self._realtime),
+            name="robot-worker",
+            daemon=True,
+        )
+        self._process.start()
+        child_conn.close()
+        self._conn = parent_conn
+        if not parent_conn.poll(STARTUP_TIMEOUT_S):
+            self._process.kill()
+            raise RuntimeError(f"the robot worker did not start within {STARTUP_TIMEOUT_S:.0f} s")
+        try:
+            message = parent_conn.recv()
+        except EOFError:
+            message = ("fatal", f"the process exited with code {self._process.exitcode} before it was ready")
+        if message[0] != "ready":
+            self._process.join(timeout=5)
+            raise RuntimeError(f"the robot worker failed to start:\n{message[1]}")
+        _, self._description, self._state = message
+        self.alive = True
+        self._reader = threading.Thread(target=self._read, name="robot-worker-reader", daemon=True)
+        self._reader.start()
+
+    def stop(self) -> None:
+        if self._process is None:
+            return
+        if self.alive:
+            try:
+                with self._send_lock:
+                    self._conn.send(("stop",))  # type: ignore[union-attr]
+            except OSError:
+                pass
+        self._process.join(timeout=10)
+        if self._process.is_alive():
+            self._process.kill()
+            self._process.join(timeout=5)
+        self.alive = False
+        if self._reader:
+            self._reader.join(timeout=2)
+        self._process = None
+
+    # RobotPort -------------------------------------------------------------------------------------------------
+
+    def submit(self, command: Command) -> CommandReply:
+        if not self.alive:
+            return CommandReply(False, "the robot worker is not running", Refusal.UNAVAILABLE)
+        request_id = next(self._ids)
+        future: Future[CommandReply] = Future()
+        with self._pending_lock:
+            self._pending[request_id] = future
+        try:
+            with self._send_lock:
+                self._conn.send(("cmd", request_id, command))  # type: ignore[union-attr]
+            return future.result(timeout=REPLY_TIMEOUT_S)
+        except (OSError, FutureTimeout):
+            return CommandReply(False, "the robot worker did not answer", Refusal.UNAVAILABLE)
+        finally:
+            with self._pending_lock:
+                self._pending.pop(request_id, None)
+
+    def state(self) -> RobotState:
+        assert self._state is not None, "start() first"
+        return self._state
+
+    def subscribe(self) -> Subscription:
+        return self._bus.subscribe()
+
+    def recent_events(self) -> list[Event]:
+        return self._bus.history()
+
+    def describe(self) -> RobotDescription:
+        assert self._description is not None, "start() first"
+        return self._description
+
+    def wait_for(self, predicate: Any, timeout_s: float) -> bool:
+        deadline = time.monotonic() + timeout_s
+        with self._state_changed:
+            while not predicate(self.state()):
+                remaining = deadline - time.monotonic()
+                if remaining <= 0:
+                    return False
+                self._state_changed.wait(min(remaining, 0.1))
+        return True
+
+    # internals -------------------------------------------------------------------------------------------------
+
+    def _read(self) -> None:
+        assert self._conn is not None
+        while True:
+            try:
+                message = self._conn.recv()
+            except (EOFError, OSError):
+                break
+            kind = message[0]
+            if kind == "state":
+                self._state = message[1]
+                with self._state_changed:
+                    self._state_changed.notify_all()
+            elif kind == "event":
+                self._bus.forward(message[1])
+            elif kind == "reply":
+                with self._pending_lock:
+                    future = self._pending.get(message[1])
+                if future is not None and not future.done():
+                    future.set_result(message[2])
+        self.alive = False
+        with self._pending_lock:
+            for future in self._pending.values():
+                if not future.done():
+                    future.set_result(CommandReply(False, "the robot worker exited", Refusal.UNAVAILABLE))
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# child process
+
+
+def child_main(conn: Connection, seed: int, control_hz: float, realtime: bool) -> None:
+    """Entry point of the worker process: build the robot, then serve commands until told to stop."""
+    try:
+        from robot.model.world import generate_world
+        from robot.worker import RobotWorker
+
+        worker = RobotWorker(generate_world(seed), realtime=realtime, control_hz=control_hz)
+        subscription = worker.subscribe()
+        description = worker.describe()
+        worker.start()
+    except Exception:
+        conn.send(("fatal", traceback.format_exc()))
+        return
+    send_lock = threading.Lock()
+
+    def send(message: tuple) -> None:
+        with send_lock:
+            conn.send(message)
+
+    send(("ready", description, worker.state()))
+    stop = threading.Event()
+    outbox = threading.Thread(target=_forward_state_and_events, args=(worker, subscription, send, stop), daemon=True)
+    outbox.start()
+    slow_commands = ThreadPoolExecutor(max_workers=2, thread_name_prefix="robot-commands")
+
+    def handle(request_id: int, command: Command) -> None:
+        try:
+            reply = worker.submit(command)
+        except Exception as exc:  # a bug must answer, not hang the caller
+            reply = CommandReply(False, f"internal error: {exc!r}", Refusal.INVALID)
+        send(("reply", request_id, reply))
+
+    try:
+        while True:
+            try:
+                message = conn.recv()
+            except (EOFError, OSError):  # the parent is gone: stop the robot safely
+                worker.submit(EStop(source="parent-lost"))
+                break
+            if message[0] == "stop":
+                break
+            _, request_id, command = message
+            if isinstance(command, _IMMEDIATE):
+                handle(request_id, command)
+            else:
+                slow_commands.submit(handle, request_id, command)
+    finally:
+        stop.set()
+        worker.stop()
+        slow_commands.shutdown(wait=False, cancel_futures=True)
+        outbox.join(timeout=2)
+        conn.close()
+
+
+def _forward_state_and_events(worker: Any, subscription: Subscription, send: Any, stop: threading.Event) -> None:
+    last_state = None
+    while not stop.is_set():
+        event = subscription.get(timeout=STATE_PERIOD_S)
+        try:
+            while event is not None:
+                send(("event", event))
+                event = subscription.get(timeout=0)
+            state = worker.state()
+            if state is not last_state:
+                send(("state", state))
+                last_state = state
+        except (OSError, BrokenPipeError):
+            return

@@ -1,0 +1,53 @@
+"""The worker in its own process behaves like the in-process one through the same interface."""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+
+from robot.interface import EStop, Mode, PlanState, Refusal, ReleaseEStop, RunCommand
+from robot.process import WorkerProcess
+
+
+@pytest.fixture(scope="module")
+def remote():
+    worker = WorkerProcess(seed=0)
+    worker.start()
+    yield worker
+    worker.stop()
+
+
+def test_commands_state_and_events_cross_the_process_boundary(remote) -> None:
+    events = remote.subscribe()
+    reply = remote.submit(RunCommand("say hello across processes"))
+    assert reply.accepted and reply.plan.steps[0].action == "say"
+    assert remote.wait_for(lambda s: s.plan is not None and s.plan.state == PlanState.SUCCEEDED, 15.0)
+    kinds = []
+    while (event := events.get(timeout=0.2)) is not None:
+        kinds.append(event.kind)
+    assert {"command/received", "plan/created", "speech/say", "plan/finished"} <= set(kinds)
+    assert "control/priority" in {e.kind for e in remote.recent_events()}
+    assert "op3" in remote.describe().mjcf_xml.lower()
+
+
+def test_invalid_command_is_refused_across_the_boundary(remote) -> None:
+    reply = remote.submit(RunCommand("pick up the purple elephant"))
+    assert not reply.accepted and reply.refusal == Refusal.INVALID
+
+
+def test_estop_latches_in_the_child(remote) -> None:
+    reply = remote.submit(EStop(source="test", client_time_s=time.time()))
+    assert reply.accepted
+    assert remote.wait_for(lambda s: s.mode == Mode.ESTOP, 5.0)
+    assert remote.submit(RunCommand("say hi")).refusal == Refusal.ESTOP_LATCHED
+    assert remote.submit(ReleaseEStop()).accepted
+    assert remote.wait_for(lambda s: s.mode == Mode.IDLE, 5.0)
+
+
+def test_a_stopped_worker_refuses_clearly() -> None:
+    worker = WorkerProcess(seed=1)
+    worker.start()
+    worker.stop()
+    reply = worker.submit(RunCommand("say hi"))
+    assert not reply.accepted and reply.refusal == Refusal.UNAVAILABLE
