@@ -19,6 +19,7 @@ run: setup
 
 test: setup-test
 	$(BIN)/ruff check app robot tests
+	$(BIN)/ruff format --check app robot tests
 	$(BIN)/python -m pytest -q
 
 lint: setup-test
@@ -26,7 +27,7 @@ lint: setup-test
 	$(BIN)/ruff format --check app robot tests
 
 bench: setup-test
-	$(BIN)/humanoid bench core --json
+	$(BIN)/humanoid bench core --output bench-results/core.json --json
 
 setup: deps-run $(VENV)/.installed-run
 setup-test: deps-test $(VENV)/.installed-test

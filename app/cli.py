@@ -20,7 +20,12 @@ def _serve(args: argparse.Namespace, settings: Settings) -> int:
     if args.viser_port is not None:
         settings = settings.model_copy(update={"viser_port": args.viser_port})
     upgrade_to_head(settings.database_url)
-    print(f"Humanoid mission control: http://{settings.host}:{settings.port}  (3D mirror on port {settings.viser_port})")
+    # Threads here (HTTP, WebSockets, the 3D mirror, the recorder) share one interpreter lock; a short switch
+    # interval bounds how long the e-stop relay can wait for it behind a busy thread.
+    sys.setswitchinterval(0.0005)
+    print(
+        f"Humanoid mission control: http://{settings.host}:{settings.port}  (3D mirror on port {settings.viser_port})"
+    )
     uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_level="warning", ws_max_size=65536)
     return 0
 
@@ -32,7 +37,9 @@ def _run(args: argparse.Namespace, settings: Settings) -> int:
     if args.json:
         print(json.dumps(result, indent=2))
     else:
-        print(f"{'SUCCESS' if result['success'] else 'FAILED'}: {result['transcript']!r} (session {result['session_id']})")
+        print(
+            f"{'SUCCESS' if result['success'] else 'FAILED'}: {result['transcript']!r} (session {result['session_id']})"
+        )
         if "error" in result:
             print(f"  {result['error']}")
         for step in result["steps"]:

@@ -19,9 +19,14 @@ from robot.interface import RobotPort
 
 log = logging.getLogger(__name__)
 
+# Smallest change of a joint angle (rad) or position (m) worth showing: 0.5 mm, 0.03 deg.
+VISIBLE_CHANGE = 5e-4
+
 
 class SceneMirror:
-    def __init__(self, port: RobotPort, host: str, viser_port: int, rate_hz: float = 30.0) -> None:
+    def __init__(
+        self, port: RobotPort, host: str, viser_port: int, rate_hz: float = 30.0, shadows: bool = False
+    ) -> None:
         description = port.describe()
         self._port = port
         self._period = 1.0 / rate_hz
@@ -32,8 +37,10 @@ class SceneMirror:
         self.server.initial_camera.look_at = (0.0, 0.0, 0.2)
         self.scene = ViserMujocoScene(self.server, self.model, num_envs=1)
         self.scene.camera_tracking_enabled = False  # a fixed world frame: the apartment stays put
+        # Shadow maps double the cost of every frame, which matters on machines that render WebGL in software.
+        self.server.scene.configure_default_lights(enabled=True, cast_shadow=shadows)
         self.updates = 0
-        self._last_qpos: tuple[float, ...] | None = None
+        self._last_qpos: np.ndarray | None = None
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="scene-mirror", daemon=True)
 
@@ -51,12 +58,16 @@ class SceneMirror:
         self.server.stop()
 
     def update_once(self) -> bool:
-        """Push the latest robot state to every viewer; returns False when nothing moved."""
-        state = self._port.state()
-        if state.qpos == self._last_qpos:
+        """Push the latest robot state to every viewer; returns False when nothing moved visibly.
+
+        Viewers render on demand: an update that nobody could see (physics jitter of a standing robot) would
+        still make every browser re-render the scene in software, which costs whole CPU cores.
+        """
+        qpos = np.asarray(self._port.state().qpos)
+        if self._last_qpos is not None and np.max(np.abs(qpos - self._last_qpos)) < VISIBLE_CHANGE:
             return False
-        self._last_qpos = state.qpos
-        self.data.qpos[:] = np.asarray(state.qpos)
+        self._last_qpos = qpos
+        self.data.qpos[:] = qpos
         mujoco.mj_kinematics(self.model, self.data)
         self.scene.update_from_mjdata(self.data)
         self.server.flush()

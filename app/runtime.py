@@ -46,7 +46,8 @@ class Runtime:
                                    sample_hz=settings.state_sample_hz)  # fmt: skip
         mirror = None
         if settings.enable_mirror:
-            mirror = SceneMirror(worker, settings.viser_host, settings.viser_port, settings.mirror_hz)
+            mirror = SceneMirror(worker, settings.viser_host, settings.viser_port, settings.mirror_hz,
+                                 shadows=settings.mirror_shadows)  # fmt: skip
             mirror.start()
         return Runtime(settings, worker, engine, db, recorder, mirror)
 

@@ -32,6 +32,10 @@ class Settings(BaseSettings):
     ws_state_hz: float = Field(20.0, gt=0, le=100, description="state pushes per second to each browser")
     max_body_bytes: int = Field(64 * 1024, gt=0, description="largest accepted HTTP request body")
     enable_mirror: bool = True
+    mirror_software_dpr: float = Field(
+        0.5, gt=0, le=2, description="3D view resolution scale in browsers that render WebGL in software"
+    )
+    mirror_shadows: bool = Field(False, description="shadows in the 3D view (costly where WebGL runs in software)")
     worker_process: bool = Field(True, description="run the robot worker in its own process (keeps its loop on time)")
 
 

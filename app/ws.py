@@ -44,7 +44,8 @@ async def _receive(ws: WebSocket, rt: Runtime) -> None:
             await ws.send_json({"type": "error", "message": "expected a JSON object with a 'type'"})
             continue
         if kind == "estop":
-            reply = rt.worker.submit(EStop(source="browser", client_time_s=_client_time(message)))
+            relayed = time.time()
+            reply = rt.worker.submit(EStop(source="browser", client_time_s=_client_time(message), relayed_at_s=relayed))
             await ws.send_json({"type": "estop_ack", "server_time_s": time.time(), **reply_json(reply)})
         elif kind == "estop_release":
             reply = rt.worker.submit(ReleaseEStop(source="browser"))

@@ -98,10 +98,15 @@ class ExecutePlan:
 
 @dataclass(frozen=True)
 class EStop:
-    """Latch the emergency stop. `client_time_s` (Unix time of the press) lets the worker measure latency."""
+    """Latch the emergency stop.
+
+    `client_time_s` (Unix time of the press) and `relayed_at_s` (when the web server got it) let the worker
+    split the latency it reports into browser-to-server and server-to-control-loop.
+    """
 
     source: str = "api"
     client_time_s: float | None = None
+    relayed_at_s: float | None = None
 
 
 @dataclass(frozen=True)

@@ -23,6 +23,7 @@ from concurrent.futures import TimeoutError as FutureTimeout
 from multiprocessing.connection import Connection
 from typing import Any
 
+from robot.control.priority import WORKER_FIFO_PRIORITY, raise_thread_priority
 from robot.events import EventBus, Subscription
 from robot.interface import (
     CancelPlan,
@@ -196,6 +197,8 @@ def child_main(conn: Connection, seed: int, control_hz: float, realtime: bool) -
         worker = RobotWorker(generate_world(seed), realtime=realtime, control_hz=control_hz)
         subscription = worker.subscribe()
         description = worker.describe()
+        if realtime:  # every thread started from here on inherits it; the control loop goes higher still
+            raise_thread_priority(WORKER_FIFO_PRIORITY)
         worker.start()
     except Exception:
         conn.send(("fatal", traceback.format_exc()))

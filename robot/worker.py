@@ -56,6 +56,10 @@ MAX_COMMAND_CHARS = 500
 MAX_TICKS_BEHIND = 5
 
 
+def _step_summary(steps: tuple[StepStatus, ...]) -> list[dict[str, str]]:
+    return [{"action": s.action, "state": s.state.value, "detail": s.detail} for s in steps]
+
+
 @dataclass
 class _Job:
     status: PlanStatus
@@ -220,7 +224,9 @@ class RobotWorker:
         measured = self.backend.read()
         self.backend.write(self._posture.freeze(measured.joint_positions))
         applied = time.time()
-        data: dict[str, Any] = {"source": command.source, "server_latency_ms": (applied - received) * 1e3}
+        data: dict[str, Any] = {"source": command.source, "worker_latency_ms": (applied - received) * 1e3}
+        if command.relayed_at_s is not None:
+            data["server_latency_ms"] = (applied - command.relayed_at_s) * 1e3
         if command.client_time_s is not None:
             data["latency_ms"] = (applied - command.client_time_s) * 1e3
         self._bus.publish("estop/latched", f"E-STOP latched ({command.source}): holding position", Level.ERROR, **data)
@@ -357,9 +363,14 @@ class RobotWorker:
             steps = tuple(replace(s, state=StepState.CANCELLED, detail=reason) for s in job.status.steps)
             job.status = replace(job.status, state=PlanState.CANCELLED, steps=steps)
             self._finished_job = job
-            self._bus.publish("plan/finished", f"plan {job.status.plan_id} {reason}", Level.WARN,
-                              plan_id=job.status.plan_id, state=PlanState.CANCELLED.value,
-                              steps=[{"action": s.action, "state": s.state.value, "detail": s.detail} for s in steps])  # fmt: skip
+            self._bus.publish(
+                "plan/finished",
+                f"plan {job.status.plan_id} {reason}",
+                Level.WARN,
+                plan_id=job.status.plan_id,
+                state=PlanState.CANCELLED.value,
+                steps=_step_summary(steps),
+            )
 
     # ----------------------------------------------------------------------------------------------------------
     # task thread
@@ -391,7 +402,7 @@ class RobotWorker:
             message = f"plan {job.status.plan_id} {result.value}" + (f": {failed[0].detail}" if failed else "")
             self._bus.publish(
                 "plan/finished", message, level, plan_id=job.status.plan_id, state=result.value,
-                steps=[{"action": s.action, "state": s.state.value, "detail": s.detail} for s in job.status.steps],
+                steps=_step_summary(job.status.steps),
             )  # fmt: skip
 
     def _on_step(self, job: _Job, index: int, state: StepState, detail: str) -> None:
@@ -476,9 +487,7 @@ class RobotWorker:
         with self._lock:
             job = self._current_job
             latched = self._estop_latched
-            mode = (
-                Mode.FALLEN if self._fallen else Mode.ESTOP if latched else Mode.EXECUTING if job else Mode.IDLE
-            )
+            mode = Mode.FALLEN if self._fallen else Mode.ESTOP if latched else Mode.EXECUTING if job else Mode.IDLE
             shown = job or self._finished_job
             plan_status = shown.status if shown else None
         position = measured.base_position

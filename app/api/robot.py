@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends
@@ -53,6 +54,7 @@ def config(rt: RuntimeDep) -> dict[str, Any]:
     description = rt.worker.describe()
     return {
         "viser_port": rt.mirror.port if rt.mirror else None,
+        "mirror_software_dpr": rt.settings.mirror_software_dpr,
         "seed": description.seed,
         "robot": description.model_name,
         "places": list(description.places),
@@ -101,8 +103,11 @@ def cancel_plan(rt: RuntimeDep) -> dict[str, Any]:
 @router.post("/estop")
 def estop(rt: RuntimeDep, body: EStopIn | None = None) -> dict[str, Any]:
     """Latch the e-stop: cancel the plan and hold position. Idempotent."""
+    relayed = time.time()
     body = body or EStopIn()
-    return reply_json(rt.worker.submit(EStop(source=body.source, client_time_s=body.client_time_s)))
+    return reply_json(
+        rt.worker.submit(EStop(source=body.source, client_time_s=body.client_time_s, relayed_at_s=relayed))
+    )
 
 
 @router.post("/estop/reset")

@@ -10,15 +10,20 @@ from __future__ import annotations
 import os
 import threading
 
-FIFO_PRIORITY = 50  # mid-range: above normal threads, below kernel housekeeping (IRQ threads are 50 too)
+CONTROL_FIFO_PRIORITY = 50  # mid-range: above normal threads, at the level of the kernel's IRQ threads
+WORKER_FIFO_PRIORITY = 40  # the worker's other threads: below the loop, above every normal process
 
 
-def raise_thread_priority() -> str:
-    """Returns a sentence describing the priority the calling thread got."""
+def raise_thread_priority(fifo_priority: int = CONTROL_FIFO_PRIORITY) -> str:
+    """Returns a sentence describing the priority the calling thread got.
+
+    Threads started afterwards by the calling thread inherit it. The worker's other threads need it too: a thread
+    holding the interpreter lock that a busy machine preempts stalls the control loop (priority inversion).
+    """
     tid = threading.get_native_id()
     try:
-        os.sched_setscheduler(tid, os.SCHED_FIFO, os.sched_param(FIFO_PRIORITY))
-        return f"real-time scheduling (SCHED_FIFO {FIFO_PRIORITY})"
+        os.sched_setscheduler(tid, os.SCHED_FIFO, os.sched_param(fifo_priority))
+        return f"real-time scheduling (SCHED_FIFO {fifo_priority})"
     except (PermissionError, OSError, AttributeError):
         pass
     try:

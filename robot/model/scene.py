@@ -35,16 +35,37 @@ def _add_object(spec: mujoco.MjSpec, obj: WorldObject) -> None:
     rgba = list(obj.rgba)
     friction = [1.0, 0.01, 0.0001]
     if obj.shape == "mug":
-        body.add_geom(type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[obj.radius, obj.height / 2],
-                      pos=[0, 0, obj.height / 2], mass=obj.mass * 0.85, rgba=rgba, friction=friction, condim=4)
+        body.add_geom(
+            type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+            size=[obj.radius, obj.height / 2],
+            pos=[0, 0, obj.height / 2],
+            mass=obj.mass * 0.85,
+            rgba=rgba,
+            friction=friction,
+            condim=4,
+        )
         body.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.006, 0.003, obj.height * 0.3],
                       pos=[0, -(obj.radius + 0.006), obj.height / 2], mass=obj.mass * 0.15, rgba=rgba,
                       friction=friction, condim=4)  # fmt: skip
     elif obj.shape == "bottle":
-        body.add_geom(type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[obj.radius, obj.height * 0.35],
-                      pos=[0, 0, obj.height * 0.35], mass=obj.mass * 0.9, rgba=rgba, friction=friction, condim=4)
-        body.add_geom(type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[obj.radius * 0.45, obj.height * 0.15],
-                      pos=[0, 0, obj.height * 0.85], mass=obj.mass * 0.1, rgba=rgba, friction=friction, condim=4)
+        body.add_geom(
+            type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+            size=[obj.radius, obj.height * 0.35],
+            pos=[0, 0, obj.height * 0.35],
+            mass=obj.mass * 0.9,
+            rgba=rgba,
+            friction=friction,
+            condim=4,
+        )
+        body.add_geom(
+            type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+            size=[obj.radius * 0.45, obj.height * 0.15],
+            pos=[0, 0, obj.height * 0.85],
+            mass=obj.mass * 0.1,
+            rgba=rgba,
+            friction=friction,
+            condim=4,
+        )
     else:
         body.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[obj.radius, 0, 0], pos=[0, 0, obj.radius],
                       mass=obj.mass, rgba=rgba, friction=friction, condim=4)  # fmt: skip
@@ -59,7 +80,9 @@ def build_scene_spec(layout: WorldLayout) -> mujoco.MjSpec:
     spec.option.impratio = IMPRATIO
 
     world = spec.worldbody
-    world.add_light(pos=[0, 0, 3], dir=[0, 0, -1], type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL, diffuse=[0.6, 0.6, 0.6])
+    world.add_light(
+        pos=[0, 0, 3], dir=[0, 0, -1], type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL, diffuse=[0.6, 0.6, 0.6]
+    )
     world.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[ROOM_X + 0.5, ROOM_Y + 0.5, 0.05],
                    rgba=[0.78, 0.74, 0.68, 1.0])  # fmt: skip
     for box in (*layout.walls, *layout.furniture, *layout.obstacles):

@@ -202,7 +202,7 @@ def occupancy_grid(layout: WorldLayout, inflate: float = ROBOT_RADIUS) -> tuple[
     """Boolean grid (True = blocked for the robot's centre) over the apartment; returns (grid, x0, y0)."""
     res = GRID_RESOLUTION
     x0, y0 = -ROOM_X, -ROOM_Y
-    nx, ny = int(round(2 * ROOM_X / res)) + 1, int(round(2 * ROOM_Y / res)) + 1
+    nx, ny = round(2 * ROOM_X / res) + 1, round(2 * ROOM_Y / res) + 1
     xs = x0 + res * np.arange(nx)
     ys = y0 + res * np.arange(ny)
     gx, gy = np.meshgrid(xs, ys, indexing="ij")
@@ -220,7 +220,7 @@ def reachable(layout: WorldLayout, goals: list[tuple[float, float]]) -> bool:
     grid, x0, y0 = occupancy_grid(layout)
 
     def cell(x: float, y: float) -> tuple[int, int]:
-        return int(round((x - x0) / GRID_RESOLUTION)), int(round((y - y0) / GRID_RESOLUTION))
+        return round((x - x0) / GRID_RESOLUTION), round((y - y0) / GRID_RESOLUTION)
 
     start = cell(*layout.robot_start[:2])
     if grid[start]:

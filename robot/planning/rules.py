@@ -35,7 +35,9 @@ class RulesPlanner:
         t = re.sub(r" (?:please|for me|now)$", "", t)
 
         # "bring the red mug to the living-room table", "put the apple on the table"
-        m = re.match(rf"^{_BRING} {_ARTICLE}(.+?)(?: from {_ARTICLE}(.+?))? (?:to|onto|on|into|in|at) {_ARTICLE}(.+)$", t)
+        m = re.match(
+            rf"^{_BRING} {_ARTICLE}(.+?)(?: from {_ARTICLE}(.+?))? (?:to|onto|on|into|in|at) {_ARTICLE}(.+)$", t
+        )
         if m:
             obj = self._object(m.group(1), world)
             destination = m.group(3)

@@ -32,7 +32,7 @@ class Measurements:
 
     @property
     def tilt_deg(self) -> float:
-        w, x, y, z = self.base_quat
+        _, x, y, _ = self.base_quat
         # z component of the trunk's up axis in the world frame
         up_z = 1.0 - 2.0 * (x * x + y * y)
         return math.degrees(math.acos(max(-1.0, min(1.0, up_z))))
@@ -93,7 +93,7 @@ class MujocoSimBackend:
 
     def step(self, duration_s: float) -> None:
         """Advance physics by `duration_s` (a whole number of physics steps)."""
-        n = max(1, int(round(duration_s / self.physics_dt)))
+        n = max(1, round(duration_s / self.physics_dt))
         mujoco.mj_step(self.model, self.data, nstep=n)
 
     def qpos(self) -> np.ndarray:

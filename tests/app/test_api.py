@@ -104,7 +104,9 @@ def test_estop_latches_refuses_commands_and_release_is_explicit(client) -> None:
 
 
 def test_estop_rejects_non_finite_client_time(client) -> None:
-    response = client.post("/api/estop", content=b'{"client_time_s": NaN}', headers={"Content-Type": "application/json"})
+    response = client.post(
+        "/api/estop", content=b'{"client_time_s": NaN}', headers={"Content-Type": "application/json"}
+    )
     assert response.status_code == 422
     assert not client.get("/api/state").json()["estop_latched"]
 

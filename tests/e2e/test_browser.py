@@ -1,0 +1,92 @@
+"""The real server and a real browser (Debian Chromium through Playwright), as an operator uses them."""
+
+from __future__ import annotations
+
+import httpx
+import pytest
+
+from app.bench.browser import chromium_path, launch_chromium, wait_for_scene_render
+from app.bench.server import ServerProcess
+
+pytestmark = pytest.mark.slow
+
+playwright_api = pytest.importorskip("playwright.sync_api")
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    with ServerProcess(tmp_path_factory.mktemp("server")) as running:
+        yield running
+
+
+@pytest.fixture(scope="module")
+def page(server):
+    with playwright_api.sync_playwright() as p:
+        browser = launch_chromium(p)
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        page.goto(server.url)
+        yield page
+        browser.close()
+
+
+def test_chromium_is_installed() -> None:
+    assert chromium_path()
+
+
+def test_the_3d_mirror_renders_in_a_cross_site_frame(page, server) -> None:
+    src = page.get_attribute("#scene", "src")
+    # page on 127.0.0.1, scene on localhost: another site; headless Chromium renders WebGL in software
+    assert src == f"http://localhost:{server.viser_port}/?fixedDpr=0.5"
+    assert wait_for_scene_render(page) > 8.0
+    playwright_api.expect(page.locator("#conn")).to_have_text("connected")
+
+
+def test_typed_command_runs_and_the_plan_shows_per_step_status(page) -> None:
+    expect = playwright_api.expect
+    page.fill("#command-text", "say hello from the browser")
+    page.click("#send")
+    expect(page.locator("#plan-steps li").first).to_have_attribute("data-state", "succeeded", timeout=15_000)
+    expect(page.locator("#events")).to_contain_text("hello from the browser")
+
+    page.fill("#command-text", "pick up the red mug from the kitchen counter")
+    page.click("#send")
+    steps = page.locator("#plan-steps li")
+    expect(steps).to_have_count(4)
+    expect(steps.first).to_have_attribute("data-state", "failed", timeout=15_000)
+    expect(steps.first).to_contain_text("cannot walk")
+    expect(page.locator("#plan-state")).to_have_text("failed")
+
+    page.fill("#command-text", "pick up the purple elephant")
+    page.click("#send")
+    expect(page.locator("#command-result")).to_contain_text("unknown object 'purple elephant'")
+
+
+def test_estop_button_latches_the_robot_and_release_is_explicit(page, server) -> None:
+    expect = playwright_api.expect
+    page.click("#estop")
+    expect(page.locator("#mode")).to_have_text("mode: estop", timeout=5_000)
+    expect(page.locator("#latched-banner")).to_be_visible()
+    state = httpx.get(server.url + "/api/state").json()
+    assert state["estop_latched"] and state["mode"] == "estop"
+    latencies = page.evaluate("window.humanoid.estopLatencies")
+    assert len(latencies) == 1 and 0 <= latencies[0] < 1000
+
+    page.fill("#command-text", "say hello")
+    page.click("#send")
+    expect(page.locator("#command-result")).to_contain_text("e-stop is latched")
+
+    page.click("#release")
+    expect(page.locator("#mode")).to_have_text("mode: idle", timeout=5_000)
+    expect(page.locator("#latched-banner")).to_be_hidden()
+    assert not httpx.get(server.url + "/api/state").json()["estop_latched"]
+
+
+def test_sessions_page_shows_the_timeline(page, server) -> None:
+    expect = playwright_api.expect
+    page.goto(server.url + "/sessions")
+    first_row = page.locator("#sessions tr").first
+    expect(first_row).to_contain_text("serve")
+    first_row.click()
+    expect(page.locator("#commands")).to_contain_text("say hello from the browser")
+    expect(page.locator("#timeline")).to_contain_text("estop/latched")
+    expect(page.locator("#plans")).to_contain_text("navigate_to(kitchen counter): failed")
