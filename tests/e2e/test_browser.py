@@ -90,3 +90,20 @@ def test_sessions_page_shows_the_timeline(page, server) -> None:
     expect(page.locator("#commands")).to_contain_text("say hello from the browser")
     expect(page.locator("#timeline")).to_contain_text("estop/latched")
     expect(page.locator("#plans")).to_contain_text("navigate_to(kitchen counter): failed")
+
+
+def test_cli_estop_latches_and_releases_a_running_server(server) -> None:
+    import os
+    import subprocess
+    import sys
+
+    def cli(*args: str) -> subprocess.CompletedProcess:
+        command = [sys.executable, "-m", "app.cli", "estop", "--url", server.url, *args]
+        return subprocess.run(command, capture_output=True, text=True, timeout=60, env=dict(os.environ))
+
+    done = cli()
+    assert done.returncode == 0 and "latched" in done.stdout
+    assert httpx.get(server.url + "/api/state").json()["estop_latched"]
+    done = cli("--release")
+    assert done.returncode == 0 and "released" in done.stdout
+    assert cli("--release").returncode == 1  # nothing to release: said, not hidden
