@@ -57,6 +57,11 @@ class SessionRecorder:
             db.commit()
             self.session_id: int = row.id
         self._subscription = port.subscribe()
+        # Events from before this session opened (the worker starting, its scheduling priority) belong to it too.
+        self._history_seq = 0
+        for event in port.recent_events():
+            self._on_event(event)
+            self._history_seq = max(self._history_seq, event.seq)
         self._thread = threading.Thread(target=self._run, name="session-recorder", daemon=True)
         self._thread.start()
 
@@ -115,6 +120,8 @@ class SessionRecorder:
             self._on_event(event)
 
     def _on_event(self, event: Event) -> None:
+        if event.seq <= self._history_seq:  # already taken from the history
+            return
         sid = self.session_id
         data = dict(event.data)
         self._pending.put(
