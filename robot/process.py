@@ -16,8 +16,8 @@ import itertools
 import logging
 import multiprocessing as mp
 import threading
-import time
 import traceback
+from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
 from concurrent.futures import TimeoutError as FutureTimeout
 from multiprocessing.connection import Connection
@@ -36,6 +36,7 @@ from robot.interface import (
     RobotDescription,
     RobotState,
 )
+from robot.state_board import StateBoard
 
 log = logging.getLogger(__name__)
 
@@ -58,8 +59,7 @@ class WorkerProcess:
         self._pending: dict[int, Future[CommandReply]] = {}
         self._pending_lock = threading.Lock()
         self._send_lock = threading.Lock()
-        self._state: RobotState | None = None
-        self._state_changed = threading.Condition()
+        self._board = StateBoard()
         self._description: RobotDescription | None = None
         self._process: mp.process.BaseProcess | None = None
         self._conn: Connection | None = None
@@ -90,7 +90,8 @@ class WorkerProcess:
         if message[0] != "ready":
             self._process.join(timeout=5)
             raise RuntimeError(f"the robot worker failed to start:\n{message[1]}")
-        _, self._description, self._state = message
+        _, self._description, initial_state = message
+        self._board.publish(initial_state)
         self.alive = True
         self._reader = threading.Thread(target=self._read, name="robot-worker-reader", daemon=True)
         self._reader.start()
@@ -133,8 +134,7 @@ class WorkerProcess:
                 self._pending.pop(request_id, None)
 
     def state(self) -> RobotState:
-        assert self._state is not None, "start() first"
-        return self._state
+        return self._board.latest()
 
     def subscribe(self) -> Subscription:
         return self._bus.subscribe()
@@ -146,15 +146,8 @@ class WorkerProcess:
         assert self._description is not None, "start() first"
         return self._description
 
-    def wait_for(self, predicate: Any, timeout_s: float) -> bool:
-        deadline = time.monotonic() + timeout_s
-        with self._state_changed:
-            while not predicate(self.state()):
-                remaining = deadline - time.monotonic()
-                if remaining <= 0:
-                    return False
-                self._state_changed.wait(min(remaining, 0.1))
-        return True
+    def wait_for(self, predicate: Callable[[RobotState], bool], timeout_s: float) -> bool:
+        return self._board.wait_for(predicate, timeout_s)
 
     # internals -------------------------------------------------------------------------------------------------
 
@@ -167,9 +160,7 @@ class WorkerProcess:
                 break
             kind = message[0]
             if kind == "state":
-                self._state = message[1]
-                with self._state_changed:
-                    self._state_changed.notify_all()
+                self._board.publish(message[1])
             elif kind == "event":
                 self._bus.forward(message[1])
             elif kind == "reply":

@@ -13,6 +13,7 @@ from __future__ import annotations
 import queue
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -50,6 +51,7 @@ from robot.planning.rules import RulesPlanner
 from robot.planning.validator import validate_plan, validate_plan_json
 from robot.planning.world_context import WorldContext
 from robot.sim.backend import MujocoSimBackend
+from robot.state_board import StateBoard
 
 MAX_COMMAND_CHARS = 500
 # When the loop falls this many ticks behind, it stops trying to catch up (sim time would race wall time).
@@ -106,8 +108,7 @@ class RobotWorker:
         self._wake = threading.Event()
         self._stop = threading.Event()
         self._sim_time = 0.0
-        self._state: RobotState | None = None
-        self._state_changed = threading.Condition()
+        self._board = StateBoard()
         self._threads: list[threading.Thread] = []
         self._description: RobotDescription | None = None
         self._publish_state(self.backend.read())
@@ -157,8 +158,7 @@ class RobotWorker:
         return CommandReply(False, f"unknown command type {type(command).__name__}", Refusal.INVALID)
 
     def state(self) -> RobotState:
-        assert self._state is not None
-        return self._state
+        return self._board.latest()
 
     def subscribe(self) -> Subscription:
         return self._bus.subscribe()
@@ -183,19 +183,9 @@ class RobotWorker:
     # ----------------------------------------------------------------------------------------------------------
     # helpers for headless runs and tests
 
-    def wait_for(self, predicate: Any, timeout_s: float) -> bool:
+    def wait_for(self, predicate: Callable[[RobotState], bool], timeout_s: float) -> bool:
         """Block until `predicate(state)` holds or the wall-clock timeout passes."""
-        deadline = time.monotonic() + timeout_s
-        with self._state_changed:
-            while not predicate(self.state()):
-                remaining = deadline - time.monotonic()
-                if remaining <= 0:
-                    return False
-                self._state_changed.wait(min(remaining, 0.1))
-        return True
-
-    def tick_durations_ms(self) -> list[float]:
-        return self._stats.tick_durations_ms()
+        return self._board.wait_for(predicate, timeout_s)
 
     # ----------------------------------------------------------------------------------------------------------
     # e-stop
@@ -491,20 +481,20 @@ class RobotWorker:
             shown = job or self._finished_job
             plan_status = shown.status if shown else None
         position = measured.base_position
-        self._state = RobotState(
-            sim_time_s=measured.sim_time_s,
-            wall_time_s=time.time(),
-            mode=mode,
-            estop_latched=latched,
-            base_position=(float(position[0]), float(position[1]), float(position[2])),
-            base_yaw_rad=measured.yaw_rad,
-            tilt_deg=measured.tilt_deg,
-            fallen=measured.fallen,
-            qpos=tuple(self.backend.qpos().tolist()),
-            objects=tuple(ObjectPose(n, p) for n, p in self.backend.object_positions().items()),
-            held_object=self._held_object,
-            plan=plan_status,
-            control=self._stats.snapshot(),
+        self._board.publish(
+            RobotState(
+                sim_time_s=measured.sim_time_s,
+                wall_time_s=time.time(),
+                mode=mode,
+                estop_latched=latched,
+                base_position=(float(position[0]), float(position[1]), float(position[2])),
+                base_yaw_rad=measured.yaw_rad,
+                tilt_deg=measured.tilt_deg,
+                fallen=measured.fallen,
+                qpos=tuple(self.backend.qpos().tolist()),
+                objects=tuple(ObjectPose(n, p) for n, p in self.backend.object_positions().items()),
+                held_object=self._held_object,
+                plan=plan_status,
+                control=self._stats.snapshot(),
+            )
         )
-        with self._state_changed:
-            self._state_changed.notify_all()

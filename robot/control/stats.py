@@ -54,6 +54,3 @@ class LoopStats:
 
     def snapshot(self) -> ControlStats:
         return self._snapshot
-
-    def tick_durations_ms(self) -> list[float]:
-        return [t * 1e3 for t in self._ticks]

@@ -133,7 +133,11 @@ def test_sessions_record_commands_plans_steps_and_events(client) -> None:
     def recorded():
         detail = client.get(f"/api/sessions/{session_id}").json()
         kinds = {e["kind"] for e in detail["events"]}
-        return {"worker/started", "control/priority", "plan/finished", "estop/latched"} <= kinds and detail["state_sample_count"] > 0 and detail
+        return (
+            {"worker/started", "control/priority", "plan/finished", "estop/latched"} <= kinds
+            and detail["state_sample_count"] > 0
+            and detail
+        )
 
     detail = wait_until(recorded)
     assert [(c["text"], c["accepted"]) for c in detail["commands"]] == [
