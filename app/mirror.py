@@ -21,16 +21,43 @@ log = logging.getLogger(__name__)
 
 # Smallest change of a joint angle (rad) or position (m) worth showing: 0.5 mm, 0.03 deg.
 VISIBLE_CHANGE = 5e-4
+# Geom groups of the packaged OP3: detailed meshes to look at, convex shapes for contacts.
+VISUAL_GROUP = 2
+COLLISION_GROUP = 3
+
+
+ROBOT_COLOUR = [0.22, 0.23, 0.26, 1.0]
+
+
+def mirror_model(mjcf_xml: str, geometry: str) -> mujoco.MjModel:
+    """The model the viewers draw. "collision" swaps the robot's detailed meshes (about 930k triangles, which a
+    browser without a GPU renders at a few frames per second) for its convex collision shapes (about 6k)."""
+    if geometry == "visual":
+        return mujoco.MjModel.from_xml_string(mjcf_xml)
+    spec = mujoco.MjSpec.from_string(mjcf_xml)
+    for geom in list(spec.geoms):
+        if geom.type == mujoco.mjtGeom.mjGEOM_MESH and geom.group == VISUAL_GROUP:
+            spec.delete(geom)
+        elif geom.group == COLLISION_GROUP:
+            geom.group = VISUAL_GROUP
+            geom.rgba = ROBOT_COLOUR
+    return spec.compile()
 
 
 class SceneMirror:
     def __init__(
-        self, port: RobotPort, host: str, viser_port: int, rate_hz: float = 30.0, shadows: bool = False
+        self,
+        port: RobotPort,
+        host: str,
+        viser_port: int,
+        rate_hz: float = 30.0,
+        shadows: bool = False,
+        geometry: str = "visual",
     ) -> None:
         description = port.describe()
         self._port = port
         self._period = 1.0 / rate_hz
-        self.model = mujoco.MjModel.from_xml_string(description.mjcf_xml)
+        self.model = mirror_model(description.mjcf_xml, geometry)
         self.data = mujoco.MjData(self.model)
         self.server = viser.ViserServer(host=host, port=viser_port, label="humanoid mirror", verbose=False)
         self.server.initial_camera.position = (-3.2, -2.8, 3.0)

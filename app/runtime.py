@@ -47,7 +47,7 @@ class Runtime:
         mirror = None
         if settings.enable_mirror:
             mirror = SceneMirror(worker, settings.viser_host, settings.viser_port, settings.mirror_hz,
-                                 shadows=settings.mirror_shadows)  # fmt: skip
+                                 shadows=settings.mirror_shadows, geometry=settings.mirror_geometry)  # fmt: skip
             mirror.start()
         return Runtime(settings, worker, engine, db, recorder, mirror)
 

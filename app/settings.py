@@ -35,6 +35,9 @@ class Settings(BaseSettings):
     mirror_software_dpr: float = Field(
         0.5, gt=0, le=2, description="3D view resolution scale in browsers that render WebGL in software"
     )
+    mirror_geometry: Literal["visual", "collision"] = Field(
+        "visual", description="robot shapes in the 3D view: detailed meshes, or the light convex collision shapes"
+    )
     mirror_shadows: bool = Field(False, description="shadows in the 3D view (costly where WebGL runs in software)")
     worker_process: bool = Field(True, description="run the robot worker in its own process (keeps its loop on time)")
 

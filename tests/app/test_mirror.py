@@ -11,15 +11,15 @@ from app.mirror import VISIBLE_CHANGE, SceneMirror
 
 
 class MovablePort:
-    """Wraps a worker so the test can move the robot's reported pose."""
+    """One snapshot of a worker's state, which the test moves by hand."""
 
     def __init__(self, worker) -> None:
         self.worker = worker
-        self.offset = np.zeros(len(worker.state().qpos))
+        self.snapshot = worker.state()
+        self.offset = np.zeros(len(self.snapshot.qpos))
 
     def state(self):
-        state = self.worker.state()
-        return dataclasses.replace(state, qpos=tuple(np.asarray(state.qpos) + self.offset))
+        return dataclasses.replace(self.snapshot, qpos=tuple(np.asarray(self.snapshot.qpos) + self.offset))
 
     def describe(self):
         return self.worker.describe()
@@ -39,3 +39,23 @@ def test_mirror_pushes_visible_motion_only(make_worker) -> None:
         assert mirror.updates == 2
     finally:
         mirror.stop()
+
+
+def test_collision_geometry_is_a_much_lighter_robot(make_worker) -> None:
+    import mujoco
+
+    from app.mirror import mirror_model
+
+    xml = make_worker(realtime=False).describe().mjcf_xml
+
+    def robot_triangles(model: mujoco.MjModel) -> int:
+        return sum(
+            int(model.mesh_facenum[model.geom_dataid[g]])
+            for g in range(model.ngeom)
+            if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH and model.geom_group[g] == 2
+        )
+
+    visual, collision = mirror_model(xml, "visual"), mirror_model(xml, "collision")
+    assert robot_triangles(collision) * 50 < robot_triangles(visual)
+    assert collision.nbody == visual.nbody  # same bodies, so the same qpos drives it
+    assert collision.nq == visual.nq
