@@ -64,7 +64,7 @@ class WorkerProcess:
         self._process: mp.process.BaseProcess | None = None
         self._conn: Connection | None = None
         self._reader: threading.Thread | None = None
-        self.alive = False
+        self._alive = False
 
     # lifecycle -------------------------------------------------------------------------------------------------
 
@@ -92,14 +92,14 @@ class WorkerProcess:
             raise RuntimeError(f"the robot worker failed to start:\n{message[1]}")
         _, self._description, initial_state = message
         self._board.publish(initial_state)
-        self.alive = True
+        self._alive = True
         self._reader = threading.Thread(target=self._read, name="robot-worker-reader", daemon=True)
         self._reader.start()
 
     def stop(self) -> None:
         if self._process is None:
             return
-        if self.alive:
+        if self._alive:
             try:
                 with self._send_lock:
                     self._conn.send(("stop",))  # type: ignore[union-attr]
@@ -109,15 +109,18 @@ class WorkerProcess:
         if self._process.is_alive():
             self._process.kill()
             self._process.join(timeout=5)
-        self.alive = False
+        self._alive = False
         if self._reader:
             self._reader.join(timeout=2)
         self._process = None
 
+    def is_alive(self) -> bool:
+        return self._alive and self._process is not None and self._process.is_alive()
+
     # RobotPort -------------------------------------------------------------------------------------------------
 
     def submit(self, command: Command) -> CommandReply:
-        if not self.alive:
+        if not self._alive:
             return CommandReply(False, "the robot worker is not running", Refusal.UNAVAILABLE)
         request_id = next(self._ids)
         future: Future[CommandReply] = Future()
@@ -168,7 +171,7 @@ class WorkerProcess:
                     future = self._pending.get(message[1])
                 if future is not None and not future.done():
                     future.set_result(message[2])
-        self.alive = False
+        self._alive = False
         with self._pending_lock:
             for future in self._pending.values():
                 if not future.done():

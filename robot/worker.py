@@ -128,6 +128,9 @@ class RobotWorker:
             thread.start()
         self._bus.publish("worker/started", f"robot worker started ({'real time' if self.realtime else 'headless'})")
 
+    def is_alive(self) -> bool:
+        return bool(self._threads) and all(t.is_alive() for t in self._threads)
+
     def stop(self) -> None:
         self._stop.set()
         self._wake.set()

@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Depends
+from fastapi import APIRouter, Depends, Response
 from pydantic import BaseModel, ConfigDict, Field
 
 from app.api.deps import raise_if_refused, runtime
@@ -36,10 +36,14 @@ class EStopIn(BaseModel):
 
 
 @router.get("/health")
-def health(rt: RuntimeDep) -> dict[str, Any]:
+def health(rt: RuntimeDep, response: Response) -> dict[str, Any]:
+    """200 while the robot worker runs; 503 with status "worker_down" when it does not (the robot is not driven)."""
     state = rt.worker.state()
+    alive = rt.worker.is_alive()
+    if not alive:
+        response.status_code = 503
     return {
-        "status": "ok",
+        "status": "ok" if alive else "worker_down",
         "mode": state.mode.value,
         "estop_latched": state.estop_latched,
         "sim_time_s": state.sim_time_s,

@@ -162,3 +162,10 @@ def test_pages_are_served(client) -> None:
     assert page.status_code == 200 and 'id="estop"' in page.text
     assert client.get("/sessions").status_code == 200
     assert client.get("/static/js/app.js").status_code == 200
+
+
+def test_health_says_when_the_worker_is_down(client) -> None:
+    client.runtime.worker.stop()
+    response = client.get("/api/health")
+    assert response.status_code == 503
+    assert response.json()["status"] == "worker_down"

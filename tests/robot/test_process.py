@@ -51,3 +51,15 @@ def test_a_stopped_worker_refuses_clearly() -> None:
     worker.stop()
     reply = worker.submit(RunCommand("say hi"))
     assert not reply.accepted and reply.refusal == Refusal.UNAVAILABLE
+
+
+def test_liveness_follows_the_child_process() -> None:
+    worker = WorkerProcess(seed=2)
+    assert not worker.is_alive()
+    worker.start()
+    assert worker.is_alive()
+    worker._process.kill()  # a crash, as the OS would report it
+    worker._process.join(timeout=5)
+    assert not worker.is_alive()
+    assert worker.submit(RunCommand("say hi")).refusal == Refusal.UNAVAILABLE
+    worker.stop()
