@@ -208,14 +208,13 @@ class RobotWorker:
         return CommandReply(True, "e-stop latched")
 
     def _apply_pending_estop(self) -> None:
-        """Control thread: the controlled stop. Freeze every joint at its measured position."""
+        """Control thread: the controlled stop. Every joint holds its current reference; the plan is cancelled."""
         with self._lock:
             pending, self._estop_pending = self._estop_pending, None
         if pending is None:
             return
         command, received = pending
-        measured = self.backend.read()
-        self.backend.write(self._posture.freeze(measured.joint_positions))
+        self.backend.write(self._posture.freeze())
         applied = time.time()
         data: dict[str, Any] = {"source": command.source, "worker_latency_ms": (applied - received) * 1e3}
         if command.relayed_at_s is not None:
@@ -223,7 +222,7 @@ class RobotWorker:
         if command.client_time_s is not None:
             data["latency_ms"] = (applied - command.client_time_s) * 1e3
         self._bus.publish("estop/latched", f"E-STOP latched ({command.source}): holding position", Level.ERROR, **data)
-        self._publish_state(measured)
+        self._publish_state(self.backend.read())
 
     def _release_estop(self, command: ReleaseEStop) -> CommandReply:
         with self._lock:

@@ -1,7 +1,8 @@
 """Posture control: hold a joint-space posture, moving to a new one with a capped joint speed.
 
-The controlled stop of the e-stop is `freeze()`: targets become the measured positions, so the biped holds
-itself where it is instead of going limp (falling) or finishing a motion.
+The controlled stop of the e-stop is `freeze()`: the joint references stop where they are, so the biped holds
+itself in place instead of going limp (falling) or finishing its motion. Holding the references, not the measured
+positions, keeps the servos' holding torque: a position servo told to stay where gravity has pushed it gives way.
 """
 
 from __future__ import annotations
@@ -26,9 +27,8 @@ class PostureController:
         """Start a capped-speed move from the current targets to `goal`."""
         self._goal = np.array(goal, dtype=float)
 
-    def freeze(self, measured_positions: np.ndarray) -> np.ndarray:
-        """Controlled stop: hold the measured posture from now on; returns the new targets."""
-        self._targets = np.array(measured_positions, dtype=float)
+    def freeze(self) -> np.ndarray:
+        """Controlled stop: no further motion from now on; returns the targets to hold."""
         self._goal = self._targets.copy()
         return self._targets.copy()
 

@@ -127,3 +127,16 @@ def test_a_new_command_preempts_the_running_plan(make_worker) -> None:
     assert worker.wait_for(plan_done(second.command_id), 10.0)
     assert worker.state().plan.state == PlanState.SUCCEEDED
     assert first.command_id != second.command_id
+
+
+def test_controlled_stop_holds_the_robot_where_it_stands(make_worker) -> None:
+    worker = make_worker(realtime=False)
+    assert worker.wait_for(lambda s: s.sim_time_s >= 1.0, 10.0)
+    before = worker.state()
+    worker.submit(EStop(source="test"))
+    assert worker.wait_for(lambda s: s.estop_latched and s.sim_time_s >= before.sim_time_s + 3.0, 10.0)
+    after = worker.state()
+    assert not after.fallen
+    assert abs(after.tilt_deg - before.tilt_deg) < 0.3  # neither sagging nor tipping
+    assert abs(after.base_position[2] - before.base_position[2]) < 0.002
+    assert np.max(np.abs(np.array(after.qpos)[7:] - np.array(before.qpos)[7:])) < 0.01

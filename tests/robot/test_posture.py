@@ -1,0 +1,26 @@
+from __future__ import annotations
+
+import numpy as np
+
+from robot.control.posture import PostureController
+
+
+def test_moves_at_a_capped_speed_and_settles() -> None:
+    controller = PostureController(np.zeros(3), max_speed_rad_s=1.0)
+    controller.move_to(np.array([0.5, -0.2, 0.0]))
+    first = controller.update(0.01)
+    assert np.allclose(first, [0.01, -0.01, 0.0])
+    for _ in range(100):
+        controller.update(0.01)
+    assert controller.settled and np.allclose(controller.update(0.01), [0.5, -0.2, 0.0])
+
+
+def test_freeze_stops_a_move_where_it_is() -> None:
+    controller = PostureController(np.zeros(2), max_speed_rad_s=1.0)
+    controller.move_to(np.array([1.0, 1.0]))
+    for _ in range(10):
+        controller.update(0.01)
+    held = controller.freeze()
+    assert np.allclose(held, [0.1, 0.1])
+    for _ in range(50):
+        assert np.allclose(controller.update(0.01), held)
