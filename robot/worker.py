@@ -50,7 +50,7 @@ from robot.planning.planner import Planner, PlanningError
 from robot.planning.rules import RulesPlanner
 from robot.planning.validator import validate_plan, validate_plan_json
 from robot.planning.world_context import WorldContext
-from robot.sim.backend import MujocoSimBackend
+from robot.sim.backend import Measurements, MujocoSimBackend
 from robot.state_board import StateBoard
 
 MAX_COMMAND_CHARS = 500
@@ -458,24 +458,26 @@ class RobotWorker:
                 next_deadline = finished + self.dt
 
     def _tick(self) -> None:
+        """One control period: targets out, physics (or the servos) forward, measurements in, state published."""
         self._apply_pending_estop()
-        measured = self.backend.read()
-        if measured.fallen and not self._fallen:
-            with self._lock:
-                self._fallen = True
-                if self._current_job:
-                    self._current_job.cancel.set()
-            self._bus.publish("robot/fell", f"the robot fell (tilt {measured.tilt_deg:.0f} deg)", Level.ERROR,
-                              tilt_deg=measured.tilt_deg, height_m=float(measured.base_position[2]))  # fmt: skip
-        targets = self._posture.update(self.dt)
-        self.backend.write(targets)
+        self.backend.write(self._posture.update(self.dt))
         self.backend.step(self.dt)
         measured = self.backend.read()
         self._sim_time = measured.sim_time_s
         self._stats.update_rtf(self._sim_time)
+        if measured.fallen and not self._fallen:
+            self._on_fall(measured)
         self._publish_state(measured)
 
-    def _publish_state(self, measured: Any) -> None:
+    def _on_fall(self, measured: Measurements) -> None:
+        with self._lock:
+            self._fallen = True
+            if self._current_job:
+                self._current_job.cancel.set()
+        self._bus.publish("robot/fell", f"the robot fell (tilt {measured.tilt_deg:.0f} deg)", Level.ERROR,
+                          tilt_deg=measured.tilt_deg, height_m=float(measured.base_position[2]))  # fmt: skip
+
+    def _publish_state(self, measured: Measurements) -> None:
         with self._lock:
             job = self._current_job
             latched = self._estop_latched

@@ -140,3 +140,26 @@ def test_controlled_stop_holds_the_robot_where_it_stands(make_worker) -> None:
     assert abs(after.tilt_deg - before.tilt_deg) < 0.3  # neither sagging nor tipping
     assert abs(after.base_position[2] - before.base_position[2]) < 0.002
     assert np.max(np.abs(np.array(after.qpos)[7:] - np.array(before.qpos)[7:])) < 0.01
+
+
+def test_a_fall_is_detected_reported_and_stops_motion(layout, scene_model) -> None:
+    import mujoco
+
+    from robot.sim.backend import MujocoSimBackend
+    from robot.worker import RobotWorker
+
+    backend = MujocoSimBackend(layout, scene_model)
+    backend.data.qpos[2] = 0.1  # lying on the floor, rolled onto its side
+    backend.data.qpos[3:7] = [np.cos(np.pi / 4), np.sin(np.pi / 4), 0.0, 0.0]
+    mujoco.mj_forward(backend.model, backend.data)
+    worker = RobotWorker(layout, backend=backend, realtime=False)
+    events = worker.subscribe()
+    worker.start()
+    try:
+        fell = wait_event(events, "robot/fell")
+        assert fell.data["tilt_deg"] > 45
+        assert worker.wait_for(lambda s: s.mode == Mode.FALLEN and s.fallen, 5.0)
+        reply = worker.submit(RunCommand("say hello"))
+        assert not reply.accepted and "fallen" in reply.message
+    finally:
+        worker.stop()
