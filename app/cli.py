@@ -23,9 +23,8 @@ def _serve(args: argparse.Namespace, settings: Settings) -> int:
     # Threads here (HTTP, WebSockets, the 3D mirror, the recorder) share one interpreter lock; a short switch
     # interval bounds how long the e-stop relay can wait for it behind a busy thread.
     sys.setswitchinterval(0.0005)
-    print(
-        f"Humanoid mission control: http://{settings.host}:{settings.port}  (3D mirror on port {settings.viser_port})"
-    )
+    print(f"Humanoid mission control: http://{settings.host}:{settings.port}")
+    print(f"  3D views on ports {settings.viser_port} (full) and {settings.viser_light_port} (light)")
     uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_level="warning", ws_max_size=65536)
     return 0
 
@@ -86,7 +85,12 @@ def build_parser() -> argparse.ArgumentParser:
     serve = sub.add_parser("serve", help="start the web app with the simulated robot (real time)")
     serve.add_argument("--host", default=None, help="interface to bind (default 127.0.0.1, or HOST)")
     serve.add_argument("--port", type=int, default=None, help="HTTP port (default 8000, or PORT)")
-    serve.add_argument("--viser-port", type=int, default=None, help="port of the 3D mirror (default 8081)")
+    serve.add_argument(
+        "--viser-port",
+        type=int,
+        default=None,
+        help="port of the full 3D view (default 8081); the light one is HUMANOID_VISER_LIGHT_PORT (8082)",
+    )
     serve.add_argument("--seed", type=int, default=None, help="world seed (object placement, obstacles)")
     serve.add_argument("--no-mirror", action="store_true", help="do not start the 3D mirror")
     serve.set_defaults(func=_serve)

@@ -9,6 +9,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
+from dataclasses import dataclass
 
 import mujoco
 import numpy as np
@@ -24,23 +25,50 @@ VISIBLE_CHANGE = 5e-4
 # Geom groups of the packaged OP3: detailed meshes to look at, convex shapes for contacts.
 VISUAL_GROUP = 2
 COLLISION_GROUP = 3
-
-
 ROBOT_COLOUR = [0.22, 0.23, 0.26, 1.0]
+FLOOR_THICKNESS = 0.01
 
 
-def mirror_model(mjcf_xml: str, geometry: str) -> mujoco.MjModel:
-    """The model the viewers draw. "collision" swaps the robot's detailed meshes (about 930k triangles, which a
-    browser without a GPU renders at a few frames per second) for its convex collision shapes (about 6k)."""
-    if geometry == "visual":
+@dataclass(frozen=True)
+class MirrorProfile:
+    """How much the viewers' browsers must render.
+
+    "full" is for browsers with a GPU: the robot's detailed meshes (about 930k triangles), image-based lighting,
+    an infinite floor grid. "light" is for browsers that render WebGL on the CPU: measured here, each "full" frame
+    keeps Chromium's GPU process busy for ~200 ms at raised priority, which delays everything else on a small
+    machine, the operator's e-stop click included. It draws the robot's convex collision shapes (about 6k
+    triangles) under plain hemisphere light, on a flat floor.
+    """
+
+    name: str
+    detailed_meshes: bool
+    image_based_lighting: bool
+    floor_grid: bool
+
+
+FULL = MirrorProfile("full", detailed_meshes=True, image_based_lighting=True, floor_grid=True)
+LIGHT = MirrorProfile("light", detailed_meshes=False, image_based_lighting=False, floor_grid=False)
+PROFILES = {p.name: p for p in (FULL, LIGHT)}
+
+
+def mirror_model(mjcf_xml: str, profile: MirrorProfile) -> mujoco.MjModel:
+    """The model the viewers draw: the worker's scene, simplified as the profile asks (same bodies and qpos)."""
+    if profile.detailed_meshes and profile.floor_grid:
         return mujoco.MjModel.from_xml_string(mjcf_xml)
     spec = mujoco.MjSpec.from_string(mjcf_xml)
     for geom in list(spec.geoms):
-        if geom.type == mujoco.mjtGeom.mjGEOM_MESH and geom.group == VISUAL_GROUP:
-            spec.delete(geom)
-        elif geom.group == COLLISION_GROUP:
-            geom.group = VISUAL_GROUP
-            geom.rgba = ROBOT_COLOUR
+        if not profile.detailed_meshes:
+            if geom.type == mujoco.mjtGeom.mjGEOM_MESH and geom.group == VISUAL_GROUP:
+                spec.delete(geom)
+                continue
+            if geom.group == COLLISION_GROUP:
+                geom.group = VISUAL_GROUP
+                geom.rgba = ROBOT_COLOUR
+        if not profile.floor_grid and geom.type == mujoco.mjtGeom.mjGEOM_PLANE:
+            # mjviser draws planes as an infinite grid with a shadow pass; a thin box is a plain floor.
+            geom.type = mujoco.mjtGeom.mjGEOM_BOX
+            geom.size = [geom.size[0], geom.size[1], FLOOR_THICKNESS / 2]
+            geom.pos = [geom.pos[0], geom.pos[1], geom.pos[2] - FLOOR_THICKNESS / 2]
     return spec.compile()
 
 
@@ -51,25 +79,31 @@ class SceneMirror:
         host: str,
         viser_port: int,
         rate_hz: float = 30.0,
+        profile: MirrorProfile = FULL,
         shadows: bool = False,
-        geometry: str = "visual",
     ) -> None:
         description = port.describe()
         self._port = port
         self._period = 1.0 / rate_hz
-        self.model = mirror_model(description.mjcf_xml, geometry)
+        self.profile = profile
+        self.model = mirror_model(description.mjcf_xml, profile)
         self.data = mujoco.MjData(self.model)
-        self.server = viser.ViserServer(host=host, port=viser_port, label="humanoid mirror", verbose=False)
+        self.server = viser.ViserServer(host=host, port=viser_port, label=f"humanoid mirror ({profile.name})",
+                                        verbose=False)  # fmt: skip
         self.server.initial_camera.position = (-3.2, -2.8, 3.0)
         self.server.initial_camera.look_at = (0.0, 0.0, 0.2)
         self.scene = ViserMujocoScene(self.server, self.model, num_envs=1)
         self.scene.camera_tracking_enabled = False  # a fixed world frame: the apartment stays put
         # Shadow maps double the cost of every frame, which matters on machines that render WebGL in software.
-        self.server.scene.configure_default_lights(enabled=True, cast_shadow=shadows)
+        self.server.scene.configure_default_lights(enabled=True, cast_shadow=shadows and profile.floor_grid)
+        if not profile.image_based_lighting:
+            self.server.scene.configure_environment_map(hdri=None, environment_intensity=0.0)
+            self.server.scene.add_light_hemisphere("/hemisphere", sky_color=(255, 255, 255),
+                                                   ground_color=(120, 110, 100), intensity=1.6)  # fmt: skip
         self.updates = 0
         self._last_qpos: np.ndarray | None = None
         self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, name="scene-mirror", daemon=True)
+        self._thread = threading.Thread(target=self._run, name=f"scene-mirror-{profile.name}", daemon=True)
 
     @property
     def port(self) -> int:

@@ -1,4 +1,4 @@
-"""Everything a running server holds: the robot port, the mirror, the DB and the session being recorded."""
+"""Everything a running server holds: the robot port, the mirrors, the DB and the session being recorded."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from sqlalchemy import Engine
 from sqlalchemy.orm import sessionmaker
 
-from app.mirror import SceneMirror
+from app.mirror import FULL, LIGHT, SceneMirror
 from app.sessions.db import make_engine, make_session_factory, upgrade_to_head
 from app.sessions.recorder import SessionRecorder
 from app.settings import Settings
@@ -27,7 +27,7 @@ class Runtime:
     engine: Engine
     db: sessionmaker
     recorder: SessionRecorder
-    mirror: SceneMirror | None
+    mirrors: dict[str, SceneMirror]  # by profile name: "full" and "light"
 
     @staticmethod
     def start(settings: Settings, worker: RobotPort | None = None) -> Runtime:
@@ -44,16 +44,17 @@ class Runtime:
         worker.start()
         recorder = SessionRecorder(db, worker, kind="serve", seed=settings.seed, backend=settings.backend,
                                    sample_hz=settings.state_sample_hz)  # fmt: skip
-        mirror = None
+        mirrors = {}
         if settings.enable_mirror:
-            mirror = SceneMirror(worker, settings.viser_host, settings.viser_port, settings.mirror_hz,
-                                 shadows=settings.mirror_shadows, geometry=settings.mirror_geometry)  # fmt: skip
-            mirror.start()
-        return Runtime(settings, worker, engine, db, recorder, mirror)
+            for profile, viser_port in ((FULL, settings.viser_port), (LIGHT, settings.viser_light_port)):
+                mirrors[profile.name] = SceneMirror(worker, settings.viser_host, viser_port, settings.mirror_hz,
+                                                    profile=profile, shadows=settings.mirror_shadows)  # fmt: skip
+                mirrors[profile.name].start()
+        return Runtime(settings, worker, engine, db, recorder, mirrors)
 
     def stop(self) -> None:
-        if self.mirror:
-            self.mirror.stop()
+        for mirror in self.mirrors.values():
+            mirror.stop()
         self.worker.stop()
         self.recorder.close(outcome=None)
         self.engine.dispose()

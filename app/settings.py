@@ -22,7 +22,8 @@ class Settings(BaseSettings):
         f"sqlite:///{REPO_ROOT / 'data' / 'humanoid.db'}",
         validation_alias=AliasChoices("DATABASE_URL", "HUMANOID_DATABASE_URL"),
     )
-    viser_port: int = Field(8081, ge=1, le=65535, description="port of the viser 3D scene server")
+    viser_port: int = Field(8081, ge=1, le=65535, description="port of the 3D view for browsers with a GPU")
+    viser_light_port: int = Field(8082, ge=1, le=65535, description="port of the light 3D view (software WebGL)")
     viser_host: str = Field("127.0.0.1", description="interface the viser server binds to")
     backend: Literal["sim"] = "sim"
     seed: int = Field(0, ge=0)
@@ -34,9 +35,6 @@ class Settings(BaseSettings):
     enable_mirror: bool = True
     mirror_software_dpr: float = Field(
         0.5, gt=0, le=2, description="3D view resolution scale in browsers that render WebGL in software"
-    )
-    mirror_geometry: Literal["visual", "collision"] = Field(
-        "visual", description="robot shapes in the 3D view: detailed meshes, or the light convex collision shapes"
     )
     mirror_shadows: bool = Field(False, description="shadows in the 3D view (costly where WebGL runs in software)")
     worker_process: bool = Field(True, description="run the robot worker in its own process (keeps its loop on time)")

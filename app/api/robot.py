@@ -49,7 +49,7 @@ def health(rt: RuntimeDep, response: Response) -> dict[str, Any]:
         "sim_time_s": state.sim_time_s,
         "control": state_json(state)["control"],
         "session_id": rt.recorder.session_id,
-        "mirror": {"port": rt.mirror.port, "updates": rt.mirror.updates} if rt.mirror else None,
+        "mirrors": {name: {"port": m.port, "updates": m.updates} for name, m in rt.mirrors.items()},
     }
 
 
@@ -57,7 +57,7 @@ def health(rt: RuntimeDep, response: Response) -> dict[str, Any]:
 def config(rt: RuntimeDep) -> dict[str, Any]:
     description = rt.worker.describe()
     return {
-        "viser_port": rt.mirror.port if rt.mirror else None,
+        "viser_ports": {name: m.port for name, m in rt.mirrors.items()},
         "mirror_software_dpr": rt.settings.mirror_software_dpr,
         "seed": description.seed,
         "robot": description.model_name,

@@ -94,7 +94,7 @@ def run_core(presses: int = 100, viewers: int = 2, duration_s: float = 20.0) -> 
         rtf = (after["sim_time_s"] - before["sim_time_s"]) / (wall_after - wall_before)
         result["serve"] = {
             "viewers_with_3d_open": len(pages),
-            "mirror_updates": after["mirror"]["updates"] if after["mirror"] else 0,
+            "mirror_updates": {name: m["updates"] for name, m in after["mirrors"].items()},
             "tick_ms": {k: round(control[f"tick_{k}_ms"], 3) for k in ("p50", "p99", "max")},
             "ticks": control["ticks"] - before["control"]["ticks"],
             "deadline_misses": control["deadline_misses"] - before["control"]["deadline_misses"],

@@ -28,10 +28,16 @@ class ServerProcess:
         self.workdir = Path(workdir)
         self.port = free_port()
         self.viser_port = free_port()
+        self.viser_light_port = free_port()
         self.url = f"http://127.0.0.1:{self.port}"
         self.seed = seed
         self.log_path = self.workdir / "server.log"
-        self._env = {**os.environ, "DATABASE_URL": f"sqlite:///{self.workdir / 'server.db'}", **(extra_env or {})}
+        self._env = {
+            **os.environ,
+            "DATABASE_URL": f"sqlite:///{self.workdir / 'server.db'}",
+            "HUMANOID_VISER_LIGHT_PORT": str(self.viser_light_port),
+            **(extra_env or {}),
+        }
         self._process: subprocess.Popen | None = None
 
     def __enter__(self) -> ServerProcess:

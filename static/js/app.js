@@ -36,7 +36,10 @@ function softwareWebGL() {
 async function loadConfig() {
   const response = await fetch("/api/config");
   humanoid.config = await response.json();
-  const port = humanoid.config.viser_port;
+  const software = softwareWebGL();
+  // Browsers without a GPU get the light view: the full one keeps a CPU renderer busy ~200 ms a frame.
+  const profile = software ? "light" : "full";
+  const port = humanoid.config.viser_ports[profile];
   const frame = $("scene");
   if (!port) {
     $("scene-note").textContent = "The 3D mirror is disabled on this server.";
@@ -45,11 +48,13 @@ async function loadConfig() {
   }
   const { host, crossSite } = sceneHost();
   const url = `${location.protocol}//${host}:${port}/`;
-  const software = softwareWebGL();
   frame.src = software ? `${url}?fixedDpr=${humanoid.config.mirror_software_dpr}` : url;
   $("scene-note").innerHTML = crossSite
     ? `3D mirror from <a href="${url}" target="_blank" rel="noopener">${url}</a> (separate site: it cannot slow the e-stop)` +
-      (software ? `; software WebGL: rendered at ${humanoid.config.mirror_software_dpr}x resolution.` : ".")
+      (software
+        ? `; software WebGL detected: light view at ${humanoid.config.mirror_software_dpr}x resolution ` +
+          `(<a href="${location.protocol}//${host}:${humanoid.config.viser_ports.full}/" target="_blank" rel="noopener">full view</a>).`
+        : ".")
     : `Open this page through 127.0.0.1 or localhost to keep the 3D view off the e-stop path, or use the ` +
       `<a href="${url}" target="_blank" rel="noopener">3D view in its own tab</a>.`;
 }

@@ -41,10 +41,10 @@ def test_mirror_pushes_visible_motion_only(make_worker) -> None:
         mirror.stop()
 
 
-def test_collision_geometry_is_a_much_lighter_robot(make_worker) -> None:
+def test_light_profile_is_a_much_lighter_scene_of_the_same_robot(make_worker) -> None:
     import mujoco
 
-    from app.mirror import mirror_model
+    from app.mirror import FULL, LIGHT, mirror_model
 
     xml = make_worker(realtime=False).describe().mjcf_xml
 
@@ -55,7 +55,10 @@ def test_collision_geometry_is_a_much_lighter_robot(make_worker) -> None:
             if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH and model.geom_group[g] == 2
         )
 
-    visual, collision = mirror_model(xml, "visual"), mirror_model(xml, "collision")
-    assert robot_triangles(collision) * 50 < robot_triangles(visual)
-    assert collision.nbody == visual.nbody  # same bodies, so the same qpos drives it
-    assert collision.nq == visual.nq
+    def planes(model: mujoco.MjModel) -> int:
+        return int(np.sum(model.geom_type == mujoco.mjtGeom.mjGEOM_PLANE))
+
+    full, light = mirror_model(xml, FULL), mirror_model(xml, LIGHT)
+    assert robot_triangles(light) * 50 < robot_triangles(full)
+    assert planes(full) == 1 and planes(light) == 0  # no infinite grid to shade
+    assert light.nbody == full.nbody and light.nq == full.nq  # the same qpos drives both
