@@ -117,7 +117,9 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--output", default=None, help="also write the JSON result to this file")
     bench.add_argument("--presses", type=int, default=100, help="e-stop presses to time")
     bench.add_argument("--viewers", type=int, default=2, help="browser pages with the 3D view open")
-    bench.add_argument("--duration", type=float, default=20.0, help="seconds of control-loop timing")
+    bench.add_argument(
+        "--duration", type=float, default=30.0, help="seconds of control-loop timing (>= 30 s: the tick window)"
+    )
     bench.set_defaults(func=_bench)
     return parser
 

@@ -1,8 +1,8 @@
 """`humanoid bench core`: control-loop timing, real-time factor and e-stop latency with browsers watching.
 
 What is measured, and how:
-- control loop: tick duration p50/p99/max over the last 30 s and deadline misses, read from the running server
-  (`/api/health`) while `viewers` headless Chromium pages have the 3D view open;
+- control loop: tick duration p50/p99/max over the last 30 s (the default window) and deadline misses, read
+  from the server (`/api/health`) while `viewers` headless Chromium pages have the 3D view open;
 - real-time factor in `serve`: simulated seconds per wall second over the same window; and headless (as fast as
   possible) from an in-process worker;
 - e-stop latency: from the browser's pointer event (its own timestamp) to the control loop applying the stop,
@@ -67,7 +67,7 @@ def _press_estop(page: Any, server: ServerProcess, presses: int) -> list[float]:
     return [float(v) for v in page.evaluate("window.humanoid.estopLatencies")]
 
 
-def run_core(presses: int = 100, viewers: int = 2, duration_s: float = 20.0) -> dict[str, Any]:
+def run_core(presses: int = 100, viewers: int = 2, duration_s: float = 30.0) -> dict[str, Any]:
     from playwright.sync_api import sync_playwright
 
     result: dict[str, Any] = {
