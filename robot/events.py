@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import queue
 import threading
@@ -21,7 +22,6 @@ class Subscription:
     def __init__(self, bus: EventBus) -> None:
         self._bus = bus
         self._queue: queue.Queue[Event] = queue.Queue(maxsize=SUBSCRIBER_QUEUE)
-        self.dropped = 0
 
     def put(self, event: Event) -> None:
         while True:
@@ -29,11 +29,8 @@ class Subscription:
                 self._queue.put_nowait(event)
                 return
             except queue.Full:
-                try:
+                with contextlib.suppress(queue.Empty):
                     self._queue.get_nowait()
-                    self.dropped += 1
-                except queue.Empty:
-                    pass
 
     def get(self, timeout: float | None = None) -> Event | None:
         try:

@@ -19,10 +19,6 @@ class PostureController:
         self._goal = self._targets.copy()
         self._max_speed = max_speed_rad_s
 
-    @property
-    def goal(self) -> np.ndarray:
-        return self._goal.copy()
-
     def move_to(self, goal: np.ndarray) -> None:
         """Start a capped-speed move from the current targets to `goal`."""
         self._goal = np.array(goal, dtype=float)

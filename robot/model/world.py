@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -90,19 +90,6 @@ class WorldLayout:
     obstacles: tuple[Box, ...]
     walls: tuple[Box, ...]
     robot_start: tuple[float, float, float]  # x, y, yaw
-    extra: dict = field(default_factory=dict)
-
-    def place(self, name: str) -> Place:
-        for place in self.places:
-            if place.name == name:
-                return place
-        raise KeyError(name)
-
-    def object(self, name: str) -> WorldObject:
-        for obj in self.objects:
-            if obj.name == name:
-                return obj
-        raise KeyError(name)
 
     @property
     def place_names(self) -> tuple[str, ...]:
