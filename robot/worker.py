@@ -43,6 +43,7 @@ from robot.interface import (
     StepState,
     StepStatus,
 )
+from robot.model import humanoid_v1
 from robot.model.scene import scene_xml
 from robot.model.world import WorldLayout
 from robot.planning.executor import Cancelled, Capability, ExecutionContext, PlanExecutor, default_capabilities
@@ -172,7 +173,7 @@ class RobotWorker:
     def describe(self) -> RobotDescription:
         if self._description is None:
             self._description = RobotDescription(
-                model_name="robotis_op3",
+                model_name=humanoid_v1.MODEL_NAME,
                 seed=self.layout.seed,
                 mjcf_xml=scene_xml(self.layout),
                 joint_names=tuple(self.backend.joint_names),

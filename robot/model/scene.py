@@ -6,7 +6,7 @@ import math
 
 import mujoco
 
-from robot.model import op3
+from robot.model import humanoid_v1, op3
 from robot.model.world import ROOM_X, ROOM_Y, Box, WorldLayout, WorldObject
 
 PHYSICS_TIMESTEP_S = 0.002  # 500 Hz
@@ -72,9 +72,9 @@ def _add_object(spec: mujoco.MjSpec, obj: WorldObject) -> None:
 
 
 def build_scene_spec(layout: WorldLayout) -> mujoco.MjSpec:
-    """The OP3 standing at the layout's start pose in its apartment."""
-    spec = op3.load_op3_spec()
-    spec.modelname = f"op3_apartment_seed{layout.seed}"
+    """humanoid_v1 standing at the layout's start pose in its apartment."""
+    spec = humanoid_v1.build_robot_spec()
+    spec.modelname = f"{humanoid_v1.MODEL_NAME}_apartment_seed{layout.seed}"
     spec.option.timestep = PHYSICS_TIMESTEP_S
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     spec.option.impratio = IMPRATIO

@@ -11,13 +11,15 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from robot.model import op3
+from robot.model import humanoid_v1
 from robot.model.scene import build_scene, object_body_name
 from robot.model.world import WorldLayout
 
 # A biped is considered fallen beyond this trunk tilt or below this trunk height.
 FALL_TILT_DEG = 45.0
 FALL_HEIGHT_M = 0.15
+# Gap left under the soles when the robot is placed, so it settles onto the floor instead of starting in it (m).
+SOLE_CLEARANCE_M = 0.001
 
 
 @dataclass(frozen=True)
@@ -25,10 +27,13 @@ class Measurements:
     """What the controller reads each tick."""
 
     sim_time_s: float
-    joint_positions: np.ndarray  # (n_joints,) in op3.JOINT_NAMES order
+    joint_positions: np.ndarray  # (n_joints,) in humanoid_v1.JOINT_NAMES order
     joint_velocities: np.ndarray
     base_position: np.ndarray  # (3,)
     base_quat: np.ndarray  # (4,) wxyz
+    imu_quat: np.ndarray  # (4,) wxyz, trunk orientation from the IMU
+    imu_gyro: np.ndarray  # (3,) rad/s in the trunk frame
+    foot_forces: np.ndarray  # (2, 4) N on each sole's four force pads, left then right
 
     @property
     def tilt_deg(self) -> float:
@@ -54,29 +59,47 @@ class MujocoSimBackend:
         self.layout = layout
         self.model = model if model is not None else build_scene(layout)
         self.data = mujoco.MjData(self.model)
-        self._joint_qpos = np.array([self.model.joint(n).qposadr[0] for n in op3.JOINT_NAMES])
-        self._joint_dof = np.array([self.model.joint(n).dofadr[0] for n in op3.JOINT_NAMES])
-        self._actuator = np.array([self.model.actuator(n + "_act").id for n in op3.JOINT_NAMES])
-        self._trunk = self.model.body(op3.TRUNK_BODY).id
+        self._joint_qpos = np.array([self.model.joint(n).qposadr[0] for n in humanoid_v1.JOINT_NAMES])
+        self._joint_dof = np.array([self.model.joint(n).dofadr[0] for n in humanoid_v1.JOINT_NAMES])
+        self._actuator = np.array([self.model.actuator(n + "_act").id for n in humanoid_v1.JOINT_NAMES])
+        self._trunk = self.model.body(humanoid_v1.TRUNK_BODY).id
         self._object_bodies = {o.name: self.model.body(object_body_name(o.name)).id for o in layout.objects}
-        self.joint_names = op3.JOINT_NAMES
+        self.joint_names = humanoid_v1.JOINT_NAMES
+        self._gyro = self._sensor_slice("imu_gyro")
+        self._imu_quat = self._sensor_slice("imu_quat")
+        self._fsr = [self._sensor_slice(f"{side}_foot_fsr{i}") for side in ("left", "right") for i in range(4)]
         self.reset()
+
+    def _sensor_slice(self, name: str) -> slice:
+        sensor = self.model.sensor(name)
+        return slice(int(sensor.adr[0]), int(sensor.adr[0] + sensor.dim[0]))
+
+    def joint_axes(self) -> dict[str, np.ndarray]:
+        """Each joint's axis in its own link frame (for controllers that must get signs right)."""
+        return {n: self.model.joint(n).axis.copy() for n in humanoid_v1.JOINT_NAMES}
 
     @property
     def physics_dt(self) -> float:
         return float(self.model.opt.timestep)
 
-    def reset(self) -> None:
-        """Robot standing at its start pose, objects where the layout puts them."""
+    def reset(self, posture: np.ndarray | None = None) -> None:
+        """Robot standing at its start pose in `posture` (default: the model's), soles on the floor; objects where
+        the layout puts them."""
         mujoco.mj_resetData(self.model, self.data)
-        stand = self.stand_targets()
+        stand = self.stand_targets() if posture is None else np.asarray(posture, dtype=float)
         self.data.qpos[self._joint_qpos] = stand
         self.data.ctrl[self._actuator] = stand
+        for grip in humanoid_v1.GRIPPER_JOINTS:  # each gripper's second finger mirrors the first
+            value = stand[humanoid_v1.JOINT_NAMES.index(grip)]
+            self.data.qpos[self.model.joint(grip + "_mimic").qposadr[0]] = value
+        mujoco.mj_kinematics(self.model, self.data)
+        sole_z = min(self.data.site(name).xpos[2] for name in humanoid_v1.FOOT_FRAMES.values())
+        self.data.qpos[2] -= sole_z - SOLE_CLEARANCE_M
         mujoco.mj_forward(self.model, self.data)
 
     def stand_targets(self) -> np.ndarray:
-        posture = op3.stand_posture()
-        return np.array([posture[n] for n in op3.JOINT_NAMES])
+        posture = humanoid_v1.stand_posture()
+        return np.array([posture[n] for n in humanoid_v1.JOINT_NAMES])
 
     def read(self) -> Measurements:
         d = self.data
@@ -86,6 +109,9 @@ class MujocoSimBackend:
             joint_velocities=d.qvel[self._joint_dof].copy(),
             base_position=d.qpos[0:3].copy(),
             base_quat=d.qpos[3:7].copy(),
+            imu_quat=d.sensordata[self._imu_quat].copy(),
+            imu_gyro=d.sensordata[self._gyro].copy(),
+            foot_forces=np.array([d.sensordata[s][0] for s in self._fsr]).reshape(2, 4),
         )
 
     def write(self, joint_targets: np.ndarray) -> None:

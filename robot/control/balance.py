@@ -1,0 +1,56 @@
+"""Closed-loop balance from the IMU: an ankle strategy on top of the gait's joint targets.
+
+The trunk's measured tilt and tilt rate (IMU) move the ankles so the feet push the body back upright: pitch
+errors act on the ankle pitch joints, roll errors on the ankle roll joints. Signs come from each joint's axis in
+the model (a mirrored sign makes the robot fall), so left and right legs get the same physical correction.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from robot.model import humanoid_v1
+
+# Gains measured in the walking prototype (shared FINDINGS.md): 0.3 x tilt + 0.02 x tilt rate.
+TILT_GAIN = 0.3
+RATE_GAIN = 0.02
+MAX_CORRECTION_RAD = 0.25
+
+
+@dataclass(frozen=True)
+class TrunkTilt:
+    roll: float
+    pitch: float
+
+    @staticmethod
+    def from_quat(quat_wxyz: np.ndarray) -> TrunkTilt:
+        w, x, y, z = (float(v) for v in quat_wxyz)
+        roll = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
+        pitch = math.asin(max(-1.0, min(1.0, 2.0 * (w * y - z * x))))
+        return TrunkTilt(roll, pitch)
+
+
+class AnkleBalance:
+    def __init__(self, joint_axes: dict[str, np.ndarray], tilt_gain: float = TILT_GAIN, rate_gain: float = RATE_GAIN):
+        names = humanoid_v1.JOINT_NAMES
+        self._pitch_idx = [names.index(n) for n in ("l_ank_pitch", "r_ank_pitch")]
+        self._roll_idx = [names.index(n) for n in ("l_ank_roll", "r_ank_roll")]
+        # Joint axes are expressed in their links; with the feet flat these match the trunk frame closely enough.
+        self._pitch_sign = np.array([float(np.sign(joint_axes[n][1])) for n in ("l_ank_pitch", "r_ank_pitch")])
+        # Roll acts with the opposite sign to pitch: found by experiment (standing roll drifted 5 deg the other way).
+        self._roll_sign = -np.array([float(np.sign(joint_axes[n][0])) for n in ("l_ank_roll", "r_ank_roll")])
+        self.tilt_gain = tilt_gain
+        self.rate_gain = rate_gain
+
+    def correct(self, targets: np.ndarray, quat_wxyz: np.ndarray, gyro: np.ndarray, trunk_pitch_ref: float = 0.0):
+        """Targets with the ankle correction added (a new array)."""
+        tilt = TrunkTilt.from_quat(quat_wxyz)
+        pitch = self.tilt_gain * (tilt.pitch - trunk_pitch_ref) + self.rate_gain * float(gyro[1])
+        roll = self.tilt_gain * tilt.roll + self.rate_gain * float(gyro[0])
+        out = np.array(targets, dtype=float)
+        out[self._pitch_idx] += np.clip(pitch, -MAX_CORRECTION_RAD, MAX_CORRECTION_RAD) * self._pitch_sign
+        out[self._roll_idx] += np.clip(roll, -MAX_CORRECTION_RAD, MAX_CORRECTION_RAD) * self._roll_sign
+        return out

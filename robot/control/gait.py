@@ -1,0 +1,252 @@
+"""Gait planning with placo's walk pattern generator (LIPM/ZMP preview over planned footsteps).
+
+`GaitPlannerCore` owns placo's `WalkPatternGenerator` and its current trajectory, and answers three requests:
+start walking from standing, replan at a future time with a new per-step displacement, and stop (two steps in
+place, then stand). Each answer is a `GaitSegment`: the trajectory sampled at the control period from the
+replanning time on, in plain numpy arrays. Sampling makes the plan a value that crosses a process boundary, so
+the ~5 ms replanning (placo holds the GIL while it plans) runs in its own process and never stalls the 100 Hz
+control loop (`robot.control.gait_process`).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import placo
+
+from robot.model import humanoid_v1
+
+# Walk parameters measured to walk this robot in MuJoCo (shared FINDINGS.md): single support 0.3 s, no double
+# support, CoM 0.23 m, foot rise 0.025 m, trunk upright.
+SINGLE_SUPPORT_S = 0.30
+SINGLE_SUPPORT_TIMESTEPS = 10
+COM_HEIGHT_M = 0.23
+FOOT_RISE_M = 0.025
+FEET_SPACING_M = 0.10
+PLANNED_TIMESTEPS = 48
+FOOTSTEPS_AHEAD = 8  # placo's repetitive footstep planner; cost grows fast above 10
+# Per-step limits (m, rad): with 0.3 s steps, 0.06 m is 0.2 m/s forward.
+MAX_STEP_FORWARD_M = 0.06
+MAX_STEP_BACKWARD_M = 0.04
+MAX_STEP_SIDE_M = 0.03
+MAX_STEP_TURN_RAD = 0.3
+# How far ahead of the replanning time a segment is sampled (s): replans come every 0.1 s, so this leaves slack.
+SEGMENT_HORIZON_S = 1.0
+# Natural frequency of the linear inverted pendulum at the walking CoM height (1/s).
+OMEGA = math.sqrt(9.81 / COM_HEIGHT_M)
+
+
+def walk_parameters() -> placo.HumanoidParameters:
+    p = placo.HumanoidParameters()
+    p.single_support_duration = SINGLE_SUPPORT_S
+    p.single_support_timesteps = SINGLE_SUPPORT_TIMESTEPS
+    p.double_support_ratio = 0.0
+    p.startend_double_support_ratio = 1.5
+    p.planned_timesteps = PLANNED_TIMESTEPS
+    p.walk_com_height = COM_HEIGHT_M
+    p.walk_foot_height = FOOT_RISE_M
+    p.walk_trunk_pitch = 0.0
+    p.walk_foot_rise_ratio = 0.2
+    p.foot_length = humanoid_v1.FOOT_LENGTH
+    p.foot_width = humanoid_v1.FOOT_WIDTH
+    p.feet_spacing = FEET_SPACING_M
+    p.zmp_margin = 0.02
+    p.foot_zmp_target_x = 0.0
+    p.foot_zmp_target_y = 0.0
+    p.walk_max_dtheta = MAX_STEP_TURN_RAD
+    p.walk_max_dy = MAX_STEP_SIDE_M
+    p.walk_max_dx_forward = MAX_STEP_FORWARD_M
+    p.walk_max_dx_backward = MAX_STEP_BACKWARD_M
+    return p
+
+
+def write_placo_model(directory: Path) -> Path:
+    """Write the placo model derived from humanoid_v1 (placo loads from a file path)."""
+    directory.mkdir(parents=True, exist_ok=True)
+    path = directory / f"{humanoid_v1.MODEL_NAME}_placo.xml"
+    text = humanoid_v1.placo_mjcf()
+    if not path.is_file() or path.read_text() != text:
+        path.write_text(text)
+    return path
+
+
+def load_placo_robot(model_path: Path) -> placo.HumanoidRobot:
+    return placo.HumanoidRobot(str(model_path), placo.Flags.mjcf)
+
+
+@dataclass(frozen=True)
+class StepCommand:
+    """Displacement per step in the robot's frame: forward, left (m) and turn (rad)."""
+
+    dx: float = 0.0
+    dy: float = 0.0
+    dtheta: float = 0.0
+
+    def clipped(self) -> StepCommand:
+        return StepCommand(
+            float(np.clip(self.dx, -MAX_STEP_BACKWARD_M, MAX_STEP_FORWARD_M)),
+            float(np.clip(self.dy, -MAX_STEP_SIDE_M, MAX_STEP_SIDE_M)),
+            float(np.clip(self.dtheta, -MAX_STEP_TURN_RAD, MAX_STEP_TURN_RAD)),
+        )
+
+
+@dataclass(frozen=True)
+class Footstep:
+    """A planned support foot placement in the planner's world frame: side, x, y, yaw."""
+
+    side: str
+    x: float
+    y: float
+    yaw: float
+
+
+@dataclass
+class GaitSegment:
+    """A planned trajectory sampled every `dt` from `t_start` (planner time, s).
+
+    Arrays have one row per sample: feet (n, 4, 4), com (n, 3), trunk rotation (n, 3, 3), zmp and dcm (n, 2),
+    support (n,) with 0 = double support, 1 = left foot, 2 = right foot. `ends_standing` marks the last segment
+    of a stop: after it the robot stands on both feet.
+    """
+
+    t_start: float
+    dt: float
+    left: np.ndarray
+    right: np.ndarray
+    com: np.ndarray
+    trunk: np.ndarray
+    zmp: np.ndarray
+    dcm: np.ndarray
+    support: np.ndarray
+    footsteps: list[Footstep] = field(default_factory=list)
+    ends_standing: bool = False
+    plan_ms: float = 0.0
+
+    @property
+    def t_end(self) -> float:
+        return self.t_start + (len(self.com) - 1) * self.dt
+
+    def index(self, t: float) -> int:
+        return int(min(max(round((t - self.t_start) / self.dt), 0), len(self.com) - 1))
+
+
+_SIDES = {"left": 1, "right": 2}
+
+
+def _yaw(matrix: np.ndarray) -> float:
+    return math.atan2(matrix[1, 0], matrix[0, 0])
+
+
+class GaitPlannerCore:
+    """placo's walk pattern generator and the current trajectory; single-threaded, no I/O."""
+
+    def __init__(self, model_path: Path, dt: float) -> None:
+        self.dt = dt
+        self.parameters = walk_parameters()
+        self.robot = load_placo_robot(model_path)
+        self._solver = placo.KinematicsSolver(self.robot)
+        self._tasks = placo.WalkTasks()
+        self._tasks.initialize_tasks(self._solver, self.robot)
+        self._trajectory: placo.WPGTrajectory | None = None
+        self._last_replan = 0.0
+        self.reset_standing()
+
+    def reset_standing(self) -> None:
+        """Put the planner's robot in the standing pose at the origin (the start of every walk)."""
+        p = self.parameters
+        self._tasks.reach_initial_pose(np.eye(4), p.feet_spacing, p.walk_com_height, p.walk_trunk_pitch)
+        # Fresh generators: placo's keep state from the previous plan, which would bend the next start.
+        self._footsteps = placo.FootstepsPlannerRepetitive(p)
+        self._walk = placo.WalkPatternGenerator(self.robot, p)
+        self._trajectory = None
+
+    def start(self, command: StepCommand, t: float) -> GaitSegment:
+        """Plan a walk from standing still, beginning at planner time `t`."""
+        self.reset_standing()
+        return self._plan(command, t)
+
+    def replan(self, command: StepCommand, t: float) -> GaitSegment:
+        """Replan the footsteps ahead with a new per-step command, continuing the current trajectory at `t`."""
+        if self._trajectory is None:
+            return self.start(command, t)
+        trajectory = self._trajectory
+        if not self._walk.can_replan_supports(trajectory, t):
+            # placo cannot change the supports at this instant (e.g. at the end of the plan): keep the old one
+            return self._sample(trajectory, t, ends_standing=False, plan_ms=0.0)
+        c = command.clipped()
+        self._footsteps.configure(c.dx, c.dy, c.dtheta, FOOTSTEPS_AHEAD)
+
+        started = time.perf_counter()
+        supports = self._walk.replan_supports(self._footsteps, trajectory, t, self._last_replan)
+        self._trajectory = self._walk.replan(supports, trajectory, t)
+        self._last_replan = t
+        return self._sample(self._trajectory, t, ends_standing=False, plan_ms=(time.perf_counter() - started) * 1e3)
+
+    def stop(self, t: float) -> GaitSegment:
+        """Two steps in place, then stand on both feet; the segment runs to the end of the trajectory."""
+        if self._trajectory is None:
+            raise RuntimeError("not walking")
+        trajectory = self._trajectory
+
+        started = time.perf_counter()
+        if self._walk.can_replan_supports(trajectory, t):
+            self._footsteps.configure(0.0, 0.0, 0.0, 2)
+            supports = self._walk.replan_supports(self._footsteps, trajectory, t, self._last_replan)
+            self._trajectory = trajectory = self._walk.replan(supports, trajectory, t)
+            self._last_replan = t
+        segment = self._sample(trajectory, t, ends_standing=True, plan_ms=(time.perf_counter() - started) * 1e3,
+                               horizon=trajectory.t_end - t)  # fmt: skip
+        return segment
+
+    # --------------------------------------------------------------------------------------------------------
+
+    def _plan(self, command: StepCommand, t: float) -> GaitSegment:
+
+        started = time.perf_counter()
+        c = command.clipped()
+        self._footsteps.configure(c.dx, c.dy, c.dtheta, FOOTSTEPS_AHEAD)
+        left = placo.flatten_on_floor(self.robot.get_T_world_left())
+        right = placo.flatten_on_floor(self.robot.get_T_world_right())
+        footsteps = self._footsteps.plan(placo.HumanoidRobot_Side.left, left, right)
+        supports = placo.FootstepsPlanner.make_supports(footsteps, t, True, self.parameters.has_double_support(), True)
+        self._trajectory = self._walk.plan(supports, self.robot.com_world(), t)
+        self._last_replan = t
+        return self._sample(self._trajectory, t, ends_standing=False, plan_ms=(time.perf_counter() - started) * 1e3)
+
+    def _sample(
+        self,
+        trajectory: placo.WPGTrajectory,
+        t0: float,
+        ends_standing: bool,
+        plan_ms: float,
+        horizon: float = SEGMENT_HORIZON_S,
+    ) -> GaitSegment:
+        t_end = min(trajectory.t_end, t0 + horizon)
+        n = max(1, math.floor((t_end - t0) / self.dt + 1e-9) + 1)
+        left = np.empty((n, 4, 4))
+        right = np.empty((n, 4, 4))
+        com = np.empty((n, 3))
+        trunk = np.empty((n, 3, 3))
+        zmp = np.empty((n, 2))
+        dcm = np.empty((n, 2))
+        support = np.empty(n, dtype=np.int8)
+        for i in range(n):
+            t = t0 + i * self.dt
+            left[i] = trajectory.get_T_world_left(t)
+            right[i] = trajectory.get_T_world_right(t)
+            com[i] = trajectory.get_p_world_CoM(t)
+            trunk[i] = trajectory.get_R_world_trunk(t)
+            zmp[i] = trajectory.get_p_world_ZMP(t, OMEGA)[:2]
+            dcm[i] = trajectory.get_p_world_DCM(t, OMEGA)[:2]
+            support[i] = 0 if trajectory.support_is_both(t) else _SIDES[str(trajectory.support_side(t))]
+        footsteps = []
+        for s in trajectory.get_supports():
+            if s.is_both():
+                continue
+            frame = s.frame()
+            footsteps.append(Footstep(str(s.side()), float(frame[0, 3]), float(frame[1, 3]), _yaw(frame)))
+        return GaitSegment(t0, self.dt, left, right, com, trunk, zmp, dcm, support, footsteps, ends_standing, plan_ms)

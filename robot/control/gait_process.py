@@ -1,0 +1,126 @@
+"""Gait planners the walking controller talks to: in the caller's thread, or in a child process.
+
+placo holds the GIL for the ~5 ms of each replanning, which would stall a 100 Hz control thread in the same
+process; `ProcessGaitPlanner` runs `GaitPlannerCore` in its own Python process (started with `subprocess`, since
+the robot worker may itself be a daemon process, which `multiprocessing` forbids to have children). Requests and
+segments are pickled over a pair of pipes; the child exits when its request pipe closes.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import pickle
+import subprocess
+import sys
+from pathlib import Path
+
+from robot.control.gait import GaitPlannerCore, GaitSegment, StepCommand
+
+
+class GaitPlannerError(RuntimeError):
+    pass
+
+
+def _answer(core: GaitPlannerCore, kind: str, command: StepCommand, t: float) -> GaitSegment:
+    if kind == "start":
+        return core.start(command, t)
+    if kind == "replan":
+        return core.replan(command, t)
+    if kind == "stop":
+        return core.stop(t)
+    raise GaitPlannerError(f"unknown gait request {kind!r}")
+
+
+class InlineGaitPlanner:
+    """Plans synchronously in the caller's thread (tests, tools); same interface as the process planner."""
+
+    def __init__(self, model_path: Path, dt: float) -> None:
+        self.core = GaitPlannerCore(model_path, dt)
+        self._answer: GaitSegment | None = None
+
+    def request(self, kind: str, command: StepCommand, t: float) -> None:
+        self._answer = _answer(self.core, kind, command, t)
+
+    def result(self, block: bool) -> GaitSegment | None:
+        answer, self._answer = self._answer, None
+        return answer
+
+    def close(self) -> None:
+        pass
+
+
+class ProcessGaitPlanner:
+    """Plans in a child process; at most one request is outstanding at a time."""
+
+    def __init__(self, model_path: Path, dt: float) -> None:
+        request_read, self._request_write = os.pipe()
+        self._answer_read, answer_write = os.pipe()
+        self._process = subprocess.Popen(
+            [sys.executable, "-m", "robot.control.gait_process", str(model_path), str(dt),
+             str(request_read), str(answer_write)],
+            pass_fds=(request_read, answer_write),
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,  # placo prints to stdout from C++
+        )  # fmt: skip
+        os.close(request_read)
+        os.close(answer_write)
+        self._requests = os.fdopen(self._request_write, "wb")
+        self._answers = os.fdopen(self._answer_read, "rb")
+        self._outstanding = 0
+        ready = pickle.load(self._answers)
+        if ready != "ready":
+            raise GaitPlannerError(f"gait planner failed to start: {ready}")
+
+    def request(self, kind: str, command: StepCommand, t: float) -> None:
+        if self._outstanding:
+            raise GaitPlannerError("a gait request is already outstanding")
+        pickle.dump((kind, command, t), self._requests)
+        self._requests.flush()
+        self._outstanding = 1
+
+    def result(self, block: bool) -> GaitSegment | None:
+        if not self._outstanding:
+            return None
+        answer = pickle.load(self._answers)  # a pipe read; only ever called once the answer is due
+        self._outstanding = 0
+        if isinstance(answer, BaseException):
+            raise GaitPlannerError(f"gait planning failed: {answer!r}")
+        return answer
+
+    def close(self) -> None:
+        with contextlib.suppress(OSError):
+            self._requests.close()
+        try:
+            self._process.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            self._process.kill()
+        self._answers.close()
+
+
+def _serve(model_path: str, dt: str, request_fd: str, answer_fd: str) -> None:
+    requests = os.fdopen(int(request_fd), "rb")
+    answers = os.fdopen(int(answer_fd), "wb")
+    try:
+        core = GaitPlannerCore(Path(model_path), float(dt))
+    except Exception as exc:  # report why, then exit
+        pickle.dump(f"{exc!r}", answers)
+        answers.flush()
+        return
+    pickle.dump("ready", answers)
+    answers.flush()
+    while True:
+        try:
+            kind, command, t = pickle.load(requests)
+        except EOFError:
+            return
+        try:
+            answer: object = _answer(core, kind, command, t)
+        except Exception as exc:  # the controller decides what a failed plan means
+            answer = exc
+        pickle.dump(answer, answers)
+        answers.flush()
+
+
+if __name__ == "__main__":
+    _serve(*sys.argv[1:5])

@@ -1,0 +1,139 @@
+"""The walking state machine: standing -> starting -> walking -> stopping -> standing.
+
+Each control tick it advances its own gait clock, asks the gait planner for a new segment every `REPLAN_PERIOD_S`
+(due `PLAN_LEAD_S` ahead, so a planner in another process answers before the segment is needed), and tracks the
+current segment with whole-body IK. A zero command stops the walk with two steps in place; a new command after a
+stop starts again from standing.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import StrEnum
+from typing import Protocol
+
+import numpy as np
+
+from robot.control.gait import Footstep, GaitSegment, StepCommand
+from robot.control.whole_body import WholeBodyIK
+
+REPLAN_PERIOD_S = 0.1
+PLAN_LEAD_S = 0.05
+# Per-step displacements smaller than these count as "stand still" (m, rad).
+STILL_STEP_M = 0.002
+STILL_STEP_RAD = 0.005
+
+
+class GaitPlanner(Protocol):
+    """Asynchronous gait planning: `request()` returns at once; `result()` gives the segment (blocking if asked)."""
+
+    def request(self, kind: str, command: StepCommand, t: float) -> None: ...
+
+    def result(self, block: bool) -> GaitSegment | None: ...
+
+    def close(self) -> None: ...
+
+
+class WalkPhase(StrEnum):
+    STANDING = "standing"
+    STARTING = "starting"
+    WALKING = "walking"
+    STOPPING = "stopping"
+
+
+@dataclass(frozen=True)
+class GaitView:
+    """What a viewer shows of the walk: the footsteps ahead, CoM and ZMP (planner frame), and the phase."""
+
+    phase: WalkPhase
+    footsteps: tuple[Footstep, ...]
+    com: tuple[float, float, float]
+    zmp: tuple[float, float]
+    support_foot: str  # "left" | "right" | "both"
+    planned_left: np.ndarray  # (4, 4) planned foot poses now (planner frame), to relate it to the world
+    planned_right: np.ndarray
+
+
+def _is_still(c: StepCommand) -> bool:
+    return abs(c.dx) < STILL_STEP_M and abs(c.dy) < STILL_STEP_M and abs(c.dtheta) < STILL_STEP_RAD
+
+
+class WalkingController:
+    def __init__(self, planner: GaitPlanner, ik: WholeBodyIK, dt: float) -> None:
+        self.planner = planner
+        self.ik = ik
+        self.dt = dt
+        self.phase = WalkPhase.STANDING
+        self.ready_targets = ik.reset_standing()
+        self._command = StepCommand()
+        self._t = 0.0
+        self._segment: GaitSegment | None = None
+        self._pending_at: float | None = None
+        self._last_request = 0.0
+        self._targets = self.ready_targets.copy()
+        self.last_plan_ms = 0.0
+
+    @property
+    def active(self) -> bool:
+        """True while the walk drives the joints (from the first planned step to standing again)."""
+        return self.phase != WalkPhase.STANDING
+
+    def set_step_command(self, command: StepCommand) -> None:
+        self._command = command.clipped()
+
+    def abort(self) -> None:
+        """Forget the walk at once (e-stop, fall, reset): the caller takes over the joints."""
+        self.phase = WalkPhase.STANDING
+        self._segment = None
+        if self._pending_at is not None:
+            self.planner.result(block=True)  # drain the answer so the next request is not confused with it
+        self._pending_at = None
+
+    def update(self) -> np.ndarray | None:
+        """Joint targets for this tick, or None when standing (the caller holds the posture)."""
+        t = self._t
+        if self.phase == WalkPhase.STANDING:
+            if _is_still(self._command):
+                return None
+            self._t = t = 0.0
+            self._targets = self.ik.reset_standing()
+            self._request("start", t + PLAN_LEAD_S)
+            self.phase = WalkPhase.STARTING
+        if self._pending_at is not None and t >= self._pending_at - 1e-9:
+            segment = self.planner.result(block=True)
+            assert segment is not None
+            self._segment = segment
+            self.last_plan_ms = segment.plan_ms
+            self._pending_at = None
+            if self.phase == WalkPhase.STARTING:
+                self.phase = WalkPhase.WALKING
+        if self.phase == WalkPhase.WALKING and self._pending_at is None and t - self._last_request >= REPLAN_PERIOD_S:
+            if _is_still(self._command):
+                self._request("stop", t + PLAN_LEAD_S)
+                self.phase = WalkPhase.STOPPING
+            else:
+                self._request("replan", t + PLAN_LEAD_S)
+        segment = self._segment
+        if segment is not None:
+            self._targets = self.ik.track(segment, segment.index(t))
+            if self.phase == WalkPhase.STOPPING and segment.ends_standing and t >= segment.t_end - 1e-9:
+                self.phase = WalkPhase.STANDING
+                self._segment = None
+        self._t = t + self.dt
+        return self._targets.copy()
+
+    def view(self) -> GaitView | None:
+        segment = self._segment
+        if segment is None:
+            return None
+        i = segment.index(self._t - self.dt)
+        support = {0: "both", 1: "left", 2: "right"}[int(segment.support[i])]
+        com = segment.com[i]
+        return GaitView(self.phase, tuple(segment.footsteps), (float(com[0]), float(com[1]), float(com[2])),
+                        (float(segment.zmp[i, 0]), float(segment.zmp[i, 1])), support, segment.left[i].copy(),
+                        segment.right[i].copy())  # fmt: skip
+
+    def _request(self, kind: str, at: float) -> None:
+        self.planner.request(kind, self._command, at)
+        self._pending_at = at
+        self._last_request = at - PLAN_LEAD_S

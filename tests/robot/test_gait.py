@@ -1,0 +1,135 @@
+"""Gait planning (placo's walk pattern generator) and the walking state machine, without physics."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from robot.control.gait import (
+    COM_HEIGHT_M,
+    FEET_SPACING_M,
+    MAX_STEP_FORWARD_M,
+    SINGLE_SUPPORT_S,
+    GaitPlannerCore,
+    StepCommand,
+    write_placo_model,
+)
+from robot.control.gait_process import InlineGaitPlanner, ProcessGaitPlanner
+from robot.control.walking import WalkingController, WalkPhase
+from robot.control.whole_body import WholeBodyIK
+from robot.model import humanoid_v1
+
+DT = 0.01
+
+
+@pytest.fixture(scope="module")
+def model_path(tmp_path_factory) -> Path:
+    return write_placo_model(tmp_path_factory.mktemp("placo"))
+
+
+@pytest.mark.parametrize(
+    ("command", "axis", "per_step"),
+    [(StepCommand(dx=0.03), 0, 0.03), (StepCommand(dx=-0.02), 0, -0.02), (StepCommand(dy=0.02), 1, 0.02)],
+)
+def test_footsteps_advance_in_the_commanded_direction(model_path, command, axis, per_step) -> None:
+    core = GaitPlannerCore(model_path, DT)
+    segment = core.start(command, 0.0)
+    steps = [(f.x, f.y) for f in segment.footsteps]
+    assert len(steps) >= 6
+    # Each foot lands further along the commanded axis at every stride (two steps), by up to two step lengths.
+    lefts = [s for s, f in zip(steps, segment.footsteps, strict=True) if f.side == "left"]
+    deltas = np.diff(np.array(lefts)[:, axis])
+    moving = deltas[np.abs(deltas) > 1e-4]
+    assert moving.size >= 2
+    assert np.all(np.sign(moving) == np.sign(per_step))
+    assert np.all(np.abs(moving) >= abs(per_step) - 1e-3) and np.all(np.abs(moving) <= 2 * abs(per_step) + 1e-3)
+    other = 1 - axis
+    assert np.all(np.abs(np.diff(np.array(lefts)[:, other])) < 1e-3)  # no drift on the other axis
+
+
+def test_turning_rotates_the_footsteps(model_path) -> None:
+    core = GaitPlannerCore(model_path, DT)
+    segment = core.start(StepCommand(dtheta=0.15), 0.0)
+    yaws = [f.yaw for f in segment.footsteps]
+    assert yaws[-1] > 0.4  # eight steps at 0.15 rad each, minus the first in place
+
+
+def test_segment_is_smooth_and_keeps_the_zmp_under_the_support_foot(model_path) -> None:
+    core = GaitPlannerCore(model_path, DT)
+    segment = core.start(StepCommand(dx=MAX_STEP_FORWARD_M), 0.0)
+    assert segment.dt == DT and len(segment.com) > 50
+    com_speed = np.linalg.norm(np.diff(segment.com, axis=0), axis=1) / DT
+    assert com_speed.max() < 0.5  # m/s: no jumps
+    # placo moves the ZMP between feet over one planner step (0.03 s) at the start of each single support
+    support = segment.support
+    settled = [i for i in np.flatnonzero(support) if i >= 4 and np.all(support[i - 4 : i + 1] == support[i])]
+    assert len(settled) > 20
+    for i in settled:
+        foot = segment.left[i] if segment.support[i] == 1 else segment.right[i]
+        local = np.linalg.inv(foot) @ np.array([*segment.zmp[i], 0.0, 1.0])
+        assert abs(local[0]) <= humanoid_v1.FOOT_LENGTH / 2 + 1e-3
+        assert abs(local[1]) <= humanoid_v1.FOOT_WIDTH / 2 + 1e-3
+
+
+def test_replanning_continues_the_trajectory_without_a_jump(model_path) -> None:
+    core = GaitPlannerCore(model_path, DT)
+    first = core.start(StepCommand(dx=0.03), 0.0)
+    t = 0.5
+    second = core.replan(StepCommand(dx=0.03, dtheta=0.1), t)
+    assert second.t_start == pytest.approx(t)
+    old = first.com[first.index(t)]
+    assert np.linalg.norm(second.com[0] - old) < 1e-3
+    assert np.allclose(second.left[0], first.left[first.index(t)], atol=1e-3)
+
+
+def test_stop_ends_standing_on_both_feet(model_path) -> None:
+    core = GaitPlannerCore(model_path, DT)
+    core.start(StepCommand(dx=0.03), 0.0)
+    segment = core.stop(0.6)
+    assert segment.ends_standing
+    assert segment.support[-1] == 0
+    left, right = segment.left[-1], segment.right[-1]
+    assert abs(left[0, 3] - right[0, 3]) < 0.005  # feet side by side
+    assert segment.t_end - 0.6 < 4 * SINGLE_SUPPORT_S + 1.0
+
+
+def test_planner_in_a_child_process_answers_like_the_inline_one(model_path) -> None:
+    child = ProcessGaitPlanner(model_path, DT)
+    try:
+        child.request("start", StepCommand(dx=0.03), 0.05)
+        start = child.result(block=True)
+        assert start is not None and start.t_start == pytest.approx(0.05)
+        assert np.allclose(start.com[0], [0.0, -FEET_SPACING_M / 2, COM_HEIGHT_M], atol=1e-6)  # from standing
+        child.request("replan", StepCommand(dy=0.02), 0.3)
+        replanned = child.result(block=True)
+        assert replanned is not None and replanned.t_start == pytest.approx(0.3)
+        assert np.linalg.norm(replanned.com[0] - start.com[start.index(0.3)]) < 1e-3
+        assert child.result(block=False) is None  # nothing outstanding
+    finally:
+        child.close()
+    assert child._process.returncode == 0  # it exits when its pipe closes
+
+
+def test_walking_controller_walks_the_kinematic_model_and_stops(model_path) -> None:
+    ik = WholeBodyIK(model_path, DT)
+    walk = WalkingController(InlineGaitPlanner(model_path, DT), ik, DT)
+    assert walk.update() is None  # standing: nothing to do
+    walk.set_step_command(StepCommand(dx=0.03))
+    for _ in range(300):  # 3 s
+        targets = walk.update()
+        assert targets is not None and len(targets) == len(humanoid_v1.JOINT_NAMES)
+        assert np.all(np.isfinite(targets))
+    assert walk.phase == WalkPhase.WALKING
+    travelled = ik.robot.get_T_world_frame(humanoid_v1.TRUNK_FRAME)[0, 3]
+    assert travelled > 0.2  # about 0.1 m/s for 3 s, minus the start
+    walk.set_step_command(StepCommand())
+    for _ in range(300):
+        if walk.update() is None:
+            break
+    assert walk.phase == WalkPhase.STANDING
+    view_free = walk.view()
+    assert view_free is None
+    assert math.isfinite(travelled)

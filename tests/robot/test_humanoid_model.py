@@ -1,0 +1,96 @@
+"""humanoid_v1: the OP3 with wrists and grippers, one source for the simulator and the whole-body controller."""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+import placo
+import pytest
+
+from robot.control.gait import load_placo_robot, write_placo_model
+from robot.model import humanoid_v1
+
+
+@pytest.fixture(scope="module")
+def robot_model() -> mujoco.MjModel:
+    return humanoid_v1.build_robot_spec().compile()
+
+
+@pytest.fixture(scope="module")
+def placo_robot(tmp_path_factory) -> placo.HumanoidRobot:
+    return load_placo_robot(write_placo_model(tmp_path_factory.mktemp("placo")))
+
+
+def test_twenty_four_servos_each_with_xm430_limits(robot_model) -> None:
+    assert robot_model.nu == 24 == len(humanoid_v1.JOINT_NAMES)
+    for i, name in enumerate(humanoid_v1.JOINT_NAMES):
+        actuator = robot_model.actuator(i)
+        assert actuator.name == name + "_act"
+        if name in humanoid_v1.GRIPPER_JOINTS:
+            assert actuator.forcerange[1] == pytest.approx(humanoid_v1.GRIP_FORCE_N / 2)
+        else:
+            assert actuator.forcerange[1] == humanoid_v1.SERVO_STALL_TORQUE_NM
+    assert pytest.approx(46 * 2 * math.pi / 60) == humanoid_v1.SERVO_NO_LOAD_SPEED_RAD_S
+
+
+def test_every_joint_has_finite_limits(robot_model) -> None:
+    limits = humanoid_v1.joint_limits()
+    assert set(limits) == set(humanoid_v1.JOINT_NAMES)
+    for name, limit in limits.items():
+        joint = robot_model.joint(name)
+        assert joint.limited[0] or robot_model.jnt_limited[joint.id]
+        assert tuple(robot_model.jnt_range[joint.id]) == pytest.approx((limit.lower, limit.upper))
+        assert limit.lower < limit.upper
+
+
+def test_stand_posture_is_inside_the_limits() -> None:
+    limits = humanoid_v1.joint_limits()
+    for posture in (humanoid_v1.stand_posture(), humanoid_v1.crouch_posture()):
+        for name, value in posture.items():
+            assert limits[name].lower <= value <= limits[name].upper, name
+
+
+def test_gripper_opens_56_mm_and_its_fingers_move_together(robot_model) -> None:
+    data = mujoco.MjData(robot_model)
+    data.qpos[2] = 1.0  # hang in the air: only the gripper matters here
+    grip = robot_model.actuator("l_grip_act").id
+    for target in (humanoid_v1.FINGER_TRAVEL, 0.0):
+        data.ctrl[grip] = target
+        for _ in range(500):
+            mujoco.mj_step(robot_model, data)
+        a = data.qpos[robot_model.joint("l_grip").qposadr[0]]
+        b = data.qpos[robot_model.joint("l_grip_mimic").qposadr[0]]
+        assert a == pytest.approx(target, abs=2e-3)
+        assert b == pytest.approx(a, abs=1e-3)
+    left = data.geom("l_finger_a_pad").xpos
+    right = data.geom("l_finger_b_pad").xpos
+    assert np.linalg.norm(left - right) < 0.01  # closed: the pads touch
+
+
+def test_placo_model_matches_the_simulated_kinematics(robot_model, placo_robot) -> None:
+    """The controller's model and the simulator agree on where the feet and hands are for any joint angles."""
+    data = mujoco.MjData(robot_model)
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        for name in humanoid_v1.JOINT_NAMES:
+            limit = humanoid_v1.joint_limits()[name]
+            value = rng.uniform(limit.lower, limit.upper)
+            data.qpos[robot_model.joint(name).qposadr[0]] = value
+            placo_robot.set_joint(name, value)
+        data.qpos[:7] = [0, 0, 0, 1, 0, 0, 0]
+        mujoco.mj_kinematics(robot_model, data)
+        placo_robot.set_T_world_fbase(np.eye(4))
+        placo_robot.update_kinematics()
+        trunk = placo_robot.get_T_world_frame(humanoid_v1.TRUNK_FRAME)
+        for frame in (*humanoid_v1.FOOT_FRAMES.values(), *humanoid_v1.HAND_FRAMES.values()):
+            in_trunk = np.linalg.inv(trunk) @ placo_robot.get_T_world_frame(frame)
+            site = data.site(frame)
+            assert np.allclose(in_trunk[:3, 3], site.xpos - data.xpos[1], atol=1e-6), frame
+            assert np.allclose(in_trunk[:3, :3], site.xmat.reshape(3, 3), atol=1e-6), frame
+
+
+def test_placo_model_has_the_same_mass(robot_model, placo_robot) -> None:
+    trunk = robot_model.body(humanoid_v1.TRUNK_BODY).id
+    assert placo_robot.total_mass() == pytest.approx(robot_model.body_subtreemass[trunk], rel=1e-6)
