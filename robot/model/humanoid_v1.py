@@ -231,24 +231,16 @@ def placo_mjcf() -> str:
         body.ipos = b.ipos.tolist()
         body.iquat = b.iquat.tolist()
         body.inertia = b.inertia.tolist()
-    for sensor in list(spec.sensors):
-        spec.delete(sensor)
-    for actuator in list(spec.actuators):
-        spec.delete(actuator)
-    for equality in list(spec.equalities):
-        spec.delete(equality)
+    for element in (*spec.sensors, *spec.actuators, *spec.equalities):
+        spec.delete(element)
     for site in list(spec.sites):
         name = site.name
         if name in FOOT_FRAMES.values() or name in HAND_FRAMES.values():
             parent = site.parent
             parent.add_body(name=name, pos=list(site.pos), mass=FRAME_MASS, inertia=[FRAME_INERTIA] * 3)
         spec.delete(site)
-    for geom in list(spec.geoms):
-        spec.delete(geom)
-    for mesh in list(spec.meshes):
-        spec.delete(mesh)
-    for material in list(spec.materials):
-        spec.delete(material)
+    for element in (*spec.geoms, *spec.meshes, *spec.materials):
+        spec.delete(element)
     for joint in list(spec.joints):
         if joint.type == mujoco.mjtJoint.mjJNT_FREE:
             spec.delete(joint)

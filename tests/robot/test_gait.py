@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np
@@ -130,6 +129,4 @@ def test_walking_controller_walks_the_kinematic_model_and_stops(model_path) -> N
         if walk.update() is None:
             break
     assert walk.phase == WalkPhase.STANDING
-    view_free = walk.view()
-    assert view_free is None
-    assert math.isfinite(travelled)
+    assert walk.view() is None  # nothing planned ahead while standing
