@@ -112,7 +112,7 @@ def build_parser() -> argparse.ArgumentParser:
     db_sub.add_parser("upgrade", help="apply pending migrations").set_defaults(func=_db)
 
     bench = sub.add_parser("bench", help="benchmarks, written as JSON")
-    bench.add_argument("suite", choices=["core"])
+    bench.add_argument("suite", choices=["core", "walk"])
     bench.add_argument("--json", action="store_true", help="print the JSON result")
     bench.add_argument("--output", default=None, help="also write the JSON result to this file")
     bench.add_argument("--presses", type=int, default=100, help="e-stop presses to time")
@@ -120,6 +120,9 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument(
         "--duration", type=float, default=30.0, help="seconds of control-loop timing (>= 30 s: the tick window)"
     )
+    bench.add_argument("--scripts", type=int, default=20, help="walk: random velocity scripts to run")
+    bench.add_argument("--script-duration", type=float, default=60.0, help="walk: seconds per script")
+    bench.add_argument("--seed", type=int, default=0, help="walk: seed of the first script")
     bench.set_defaults(func=_bench)
     return parser
 

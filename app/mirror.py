@@ -16,7 +16,8 @@ import numpy as np
 import viser
 from mjviser.scene import ViserMujocoScene
 
-from robot.interface import RobotPort
+from robot.interface import LocomotionState, RobotPort
+from robot.model import humanoid_v1
 
 log = logging.getLogger(__name__)
 
@@ -72,6 +73,55 @@ def mirror_model(mjcf_xml: str, profile: MirrorProfile) -> mujoco.MjModel:
     return spec.compile()
 
 
+# Gait overlay: how many planned footsteps can be shown, and their colours (left blue, right orange).
+MAX_FOOTSTEPS = 12
+FOOTSTEP_COLOURS = {"left": (60, 120, 230), "right": (240, 140, 40)}
+COM_COLOUR = (230, 40, 40)
+ZMP_COLOUR = (40, 180, 60)
+OVERLAY_Z = 0.003  # just above the floor
+
+
+class GaitOverlay:
+    """Footsteps planned ahead (flat boxes the size of a sole), the CoM (a sphere) and the ZMP (a disc on the floor)."""
+
+    def __init__(self, server: viser.ViserServer) -> None:
+        scene = server.scene
+        size = (humanoid_v1.FOOT_LENGTH, humanoid_v1.FOOT_WIDTH, 0.004)
+        self._steps = [self._footstep(scene, i, size) for i in range(MAX_FOOTSTEPS)]
+        self._com = scene.add_icosphere("/gait/com", radius=0.02, color=COM_COLOUR, cast_shadow=False, visible=False)
+        self._zmp = scene.add_box("/gait/zmp", color=ZMP_COLOUR, dimensions=(0.025, 0.025, 0.004), cast_shadow=False,
+                                  receive_shadow=False, visible=False)  # fmt: skip
+        self.shown = False
+
+    @staticmethod
+    def _footstep(scene: viser.SceneApi, index: int, size: tuple[float, float, float]) -> viser.BoxHandle:
+        return scene.add_box(f"/gait/footstep_{index}", color=FOOTSTEP_COLOURS["left"], dimensions=size,
+                             opacity=0.55, cast_shadow=False, receive_shadow=False, visible=False)  # fmt: skip
+
+    def update(self, loco: LocomotionState | None) -> None:
+        if loco is None or loco.com is None:
+            if self.shown:
+                for handle in (*self._steps, self._com, self._zmp):
+                    handle.visible = False
+                self.shown = False
+            return
+        for i, handle in enumerate(self._steps):
+            if i < len(loco.footsteps):
+                step = loco.footsteps[i]
+                handle.position = (step.x, step.y, OVERLAY_Z)
+                handle.wxyz = (float(np.cos(step.yaw / 2)), 0.0, 0.0, float(np.sin(step.yaw / 2)))
+                handle.color = FOOTSTEP_COLOURS.get(step.side, FOOTSTEP_COLOURS["left"])
+                handle.visible = True
+            elif handle.visible:
+                handle.visible = False
+        self._com.position = loco.com
+        self._com.visible = True
+        if loco.zmp is not None:
+            self._zmp.position = (loco.zmp[0], loco.zmp[1], OVERLAY_Z + 0.002)
+            self._zmp.visible = True
+        self.shown = True
+
+
 class SceneMirror:
     def __init__(
         self,
@@ -100,6 +150,7 @@ class SceneMirror:
             self.server.scene.configure_environment_map(hdri=None, environment_intensity=0.0)
             self.server.scene.add_light_hemisphere("/hemisphere", sky_color=(255, 255, 255),
                                                    ground_color=(120, 110, 100), intensity=1.6)  # fmt: skip
+        self.gait = GaitOverlay(self.server)
         self.updates = 0
         self._last_qpos: np.ndarray | None = None
         self._stop = threading.Event()
@@ -124,13 +175,18 @@ class SceneMirror:
         Viewers render on demand: an update that nobody could see (physics jitter of a standing robot) would
         still make every browser re-render the scene in software, which costs whole CPU cores.
         """
-        qpos = np.asarray(self._port.state().qpos)
+        state = self._port.state()
+        qpos = np.asarray(state.qpos)
         if self._last_qpos is not None and np.max(np.abs(qpos - self._last_qpos)) < VISIBLE_CHANGE:
+            if self.gait.shown and (state.locomotion is None or state.locomotion.com is None):
+                self.gait.update(None)  # the walk ended while the robot stood still: clear its overlay
+                self.server.flush()
             return False
         self._last_qpos = qpos
         self.data.qpos[:] = qpos
         mujoco.mj_kinematics(self.model, self.data)
         self.scene.update_from_mjdata(self.data)
+        self.gait.update(state.locomotion)
         self.server.flush()
         self.updates += 1
         return True

@@ -26,6 +26,7 @@ def state_json(state: RobotState, include_qpos: bool = False) -> dict[str, Any]:
         "objects": {o.name: list(o.position) for o in state.objects},
         "plan": plan_status_json(state.plan),
         "control": dataclasses.asdict(state.control),
+        "locomotion": dataclasses.asdict(state.locomotion) if state.locomotion is not None else None,
     }
     if include_qpos:
         out["qpos"] = list(state.qpos)

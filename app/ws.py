@@ -3,7 +3,9 @@
 Messages from the server: {"type": "hello", ...}, {"type": "state", "state": ...}, {"type": "event", "event": ...},
 {"type": "estop_ack", ...}, {"type": "error", "message": ...}.
 Messages to the server: {"type": "estop", "client_time_s": float | null}, {"type": "estop_release"},
-{"type": "ping", "t": any}.
+{"type": "teleop", "vx": float, "vy": float, "yaw_rate": float} (repeat every 100 ms while driving; a refusal
+is answered with {"type": "teleop_ack", ...}), {"type": "teleop_stop"}, {"type": "ping", "t": any}.
+A socket that drove the robot stops it when it closes: the browser's connection is part of the deadman.
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 
 from app.runtime import Runtime
 from app.serialize import event_json, reply_json, state_json
-from robot.interface import EStop, ReleaseEStop
+from robot.interface import EStop, ReleaseEStop, StopTeleop, Teleop
 
 router = APIRouter()
 MAX_MESSAGE_BYTES = 4096
@@ -31,7 +33,14 @@ def _client_time(message: dict[str, Any]) -> float | None:
     return None
 
 
-async def _receive(ws: WebSocket, rt: Runtime) -> None:
+def _number(message: dict[str, Any], key: str) -> float:
+    value = message.get(key, 0.0)
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise ValueError(f"{key} must be a finite number")
+    return float(value)
+
+
+async def _receive(ws: WebSocket, rt: Runtime, drove: list[bool]) -> None:
     while True:
         raw = await ws.receive_text()
         if len(raw) > MAX_MESSAGE_BYTES:
@@ -50,6 +59,19 @@ async def _receive(ws: WebSocket, rt: Runtime) -> None:
         elif kind == "estop_release":
             reply = rt.worker.submit(ReleaseEStop(source="browser"))
             await ws.send_json({"type": "estop_release_ack", **reply_json(reply)})
+        elif kind == "teleop":
+            try:
+                velocity = (_number(message, "vx"), _number(message, "vy"), _number(message, "yaw_rate"))
+            except ValueError as exc:
+                await ws.send_json({"type": "teleop_ack", "accepted": False, "message": str(exc)})
+                continue
+            reply = rt.worker.submit(Teleop(*velocity, source="browser"))
+            if reply.accepted:
+                drove[0] = True
+            else:
+                await ws.send_json({"type": "teleop_ack", **reply_json(reply)})
+        elif kind == "teleop_stop":
+            rt.worker.submit(StopTeleop(source="browser"))
         elif kind == "ping":
             await ws.send_json({"type": "pong", "t": message.get("t"), "server_time_s": time.time()})
         else:
@@ -80,7 +102,8 @@ async def robot_socket(ws: WebSocket) -> None:
             "recent_events": [event_json(e) for e in rt.worker.recent_events()[-100:]],
         }
     )
-    tasks = [asyncio.create_task(_receive(ws, rt)), asyncio.create_task(_send(ws, rt))]
+    drove = [False]  # whether this socket has driven the robot (then its closing stops it)
+    tasks = [asyncio.create_task(_receive(ws, rt, drove)), asyncio.create_task(_send(ws, rt))]
     try:
         done, _ = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
         for task in done:
@@ -91,3 +114,5 @@ async def robot_socket(ws: WebSocket) -> None:
     finally:
         for task in tasks:
             task.cancel()
+        if drove[0]:
+            rt.worker.submit(StopTeleop(source="browser-disconnect"))

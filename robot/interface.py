@@ -124,7 +124,45 @@ class CancelPlan:
     """Stop executing the current plan (not an e-stop: the robot keeps balancing)."""
 
 
-Command = RunCommand | ExecutePlan | EStop | ReleaseEStop | Replan | CancelPlan
+@dataclass(frozen=True)
+class Teleop:
+    """Operator velocity in the robot's frame: forward (m/s), left (m/s), counter-clockwise turn (rad/s).
+
+    A deadman command: the robot stops unless another one arrives within the teleop timeout (300 ms). Refused
+    while a plan runs (teleop and plan execution are exclusive), after a fall, and under a latched e-stop.
+    """
+
+    vx: float = 0.0
+    vy: float = 0.0
+    yaw_rate: float = 0.0
+    source: str = "api"
+
+
+@dataclass(frozen=True)
+class StopTeleop:
+    """Input ended (keys released, joystick let go, browser gone): decelerate and stop now."""
+
+    source: str = "api"
+
+
+class Posture(StrEnum):
+    STAND = "stand"  # the walk-ready stance every walk starts from and ends in
+    CROUCH = "crouch"
+
+
+@dataclass(frozen=True)
+class SetPosture:
+    posture: Posture
+
+
+@dataclass(frozen=True)
+class ResetRobot:
+    """Simulation only: put the robot back standing at its start pose (after a fall, or to start over)."""
+
+
+PlanCommand = RunCommand | ExecutePlan | Replan | CancelPlan
+MotionCommand = Teleop | StopTeleop | SetPosture | ResetRobot
+Command = PlanCommand | MotionCommand | EStop | ReleaseEStop
 
 
 class Refusal(StrEnum):
@@ -134,6 +172,8 @@ class Refusal(StrEnum):
     INVALID = "invalid"  # 422
     NOTHING_TO_REPLAN = "nothing_to_replan"  # 409
     NOT_LATCHED = "not_latched"  # 409
+    BUSY = "busy"  # 409: the robot is doing something else (a plan, teleop, walking)
+    UNSUPPORTED = "unsupported"  # 501: not possible with this backend (e.g. reset on hardware)
     UNAVAILABLE = "unavailable"  # 503: the worker does not answer
 
 
@@ -154,6 +194,7 @@ class CommandReply:
 class Mode(StrEnum):
     IDLE = "idle"  # standing, no plan
     EXECUTING = "executing"  # a plan is running
+    TELEOP = "teleop"  # an operator drives the robot's velocity
     ESTOP = "estop"  # e-stop latched: controlled stop, holding in place
     FALLEN = "fallen"
 
@@ -185,6 +226,29 @@ class ObjectPose:
 
 
 @dataclass(frozen=True)
+class Footprint:
+    side: str  # "left" | "right"
+    x: float
+    y: float
+    yaw: float
+
+
+@dataclass(frozen=True)
+class LocomotionState:
+    """The walk as the operator sees it: phase, velocities, estimated pose, and what the mirror draws."""
+
+    phase: str  # standing | starting | walking | stopping
+    posture: str  # stand | crouch | moving
+    command: tuple[float, float, float]  # accepted (vx, vy, yaw rate)
+    velocity: tuple[float, float, float]  # after acceleration limits
+    estimated_pose: tuple[float, float, float]  # leg odometry + IMU heading: x, y, yaw
+    footsteps: tuple[Footprint, ...] = ()  # planned ahead, world frame
+    com: tuple[float, float, float] | None = None
+    zmp: tuple[float, float] | None = None
+    support: str = "both"
+
+
+@dataclass(frozen=True)
 class RobotState:
     """An immutable snapshot published by the control loop."""
 
@@ -201,6 +265,7 @@ class RobotState:
     held_object: str | None
     plan: PlanStatus | None
     control: ControlStats
+    locomotion: LocomotionState | None = None
 
 
 @dataclass(frozen=True)

@@ -33,8 +33,12 @@ from robot.interface import (
     Event,
     Refusal,
     ReleaseEStop,
+    ResetRobot,
     RobotDescription,
     RobotState,
+    SetPosture,
+    StopTeleop,
+    Teleop,
 )
 from robot.state_board import StateBoard
 
@@ -44,7 +48,7 @@ STATE_PERIOD_S = 0.01  # state snapshots sent to the parent at up to 100 Hz
 REPLY_TIMEOUT_S = 30.0  # planning may take a while (an LLM); the e-stop never waits behind it
 STARTUP_TIMEOUT_S = 180.0
 # Commands that must never queue behind a slow one: handled inline by the child's receiving thread.
-_IMMEDIATE = (EStop, ReleaseEStop, CancelPlan)
+_IMMEDIATE = (EStop, ReleaseEStop, CancelPlan, Teleop, StopTeleop, SetPosture, ResetRobot)
 
 
 class WorkerProcess:

@@ -11,14 +11,21 @@
 from __future__ import annotations
 
 import queue
+import shutil
+import tempfile
 import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
+from pathlib import Path
 from typing import Any
 
+import numpy as np
+
+from robot.control.locomotion import LocomotionController, Velocity, clip_velocity
 from robot.control.posture import PostureController
 from robot.control.priority import raise_thread_priority
+from robot.control.stack import build_locomotion, measured_pose, sensors
 from robot.control.stats import LoopStats
 from robot.events import EventBus, Subscription
 from robot.interface import (
@@ -28,20 +35,27 @@ from robot.interface import (
     EStop,
     Event,
     ExecutePlan,
+    Footprint,
     Level,
+    LocomotionState,
     Mode,
     ObjectPose,
     Plan,
     PlanState,
     PlanStatus,
+    Posture,
     Refusal,
     ReleaseEStop,
     Replan,
+    ResetRobot,
     RobotDescription,
     RobotState,
     RunCommand,
+    SetPosture,
     StepState,
     StepStatus,
+    StopTeleop,
+    Teleop,
 )
 from robot.model import humanoid_v1
 from robot.model.scene import scene_xml
@@ -57,6 +71,8 @@ from robot.state_board import StateBoard
 MAX_COMMAND_CHARS = 500
 # When the loop falls this many ticks behind, it stops trying to catch up (sim time would race wall time).
 MAX_TICKS_BEHIND = 5
+# Deadman: teleop motion stops when no teleop command has arrived for this long (s).
+TELEOP_TIMEOUT_S = 0.3
 
 
 def _step_summary(steps: tuple[StepStatus, ...]) -> list[dict[str, str]]:
@@ -81,6 +97,7 @@ class RobotWorker:
         capabilities: dict[str, Capability] | None = None,
         realtime: bool = True,
         control_hz: float = 100.0,
+        locomotion: LocomotionController | None = None,
     ) -> None:
         self.layout = layout
         self.backend = backend or MujocoSimBackend(layout)
@@ -91,7 +108,19 @@ class RobotWorker:
         self._executor = PlanExecutor(capabilities or default_capabilities())
         self._bus = EventBus(sim_clock=lambda: self._sim_time)
         self._stats = LoopStats(control_hz)
-        self._posture = PostureController(self.backend.stand_targets())
+        self._model_dir: str | None = None
+        if locomotion is None:
+            # the gait planner runs in its own process in real time (its replans hold the interpreter lock)
+            self._model_dir = tempfile.mkdtemp(prefix="humanoid-placo-")
+            locomotion = build_locomotion(self.backend, Path(self._model_dir), realtime)
+        self._loco = locomotion
+        self._stand = self._loco.stand_targets  # the walk-ready stance: every walk starts and ends in it
+        self.backend.reset(self._stand)
+        self._posture = PostureController(self._stand)
+        self._posture_name = Posture.STAND
+        self._measured = self.backend.read()
+        self._targets = self._stand.copy()
+        self._loco.reset_odometry(measured_pose(self._measured), sensors(self._measured))
 
         self._lock = threading.RLock()  # guards the fields below
         self._estop_latched = False
@@ -104,6 +133,10 @@ class RobotWorker:
         self._next_command_id = 1
         self._next_plan_id = 1
         self._revisions: dict[int, int] = {}
+        self._teleop_active = False
+        self._teleop_velocity = Velocity()
+        self._teleop_deadline: float | None = None
+        self._reset_pending = False
 
         self._jobs: queue.Queue[_Job | None] = queue.Queue()
         self._wake = threading.Event()
@@ -142,6 +175,9 @@ class RobotWorker:
         for thread in self._threads:
             thread.join(timeout=5.0)
         self._threads = []
+        self._loco.walking.planner.close()
+        if self._model_dir is not None:
+            shutil.rmtree(self._model_dir, ignore_errors=True)
 
     # ----------------------------------------------------------------------------------------------------------
     # RobotPort
@@ -159,6 +195,14 @@ class RobotWorker:
             return self._execute_plan(command)
         if isinstance(command, Replan):
             return self._replan()
+        if isinstance(command, Teleop):
+            return self._teleop(command)
+        if isinstance(command, StopTeleop):
+            return self._stop_teleop(command.source, "stopped")
+        if isinstance(command, SetPosture):
+            return self._set_posture(command.posture)
+        if isinstance(command, ResetRobot):
+            return self._reset_robot()
         return CommandReply(False, f"unknown command type {type(command).__name__}", Refusal.INVALID)
 
     def state(self) -> RobotState:
@@ -215,14 +259,21 @@ class RobotWorker:
         if pending is None:
             return
         command, received = pending
-        self.backend.write(self._posture.freeze())
+        self._teleop_velocity, self._teleop_deadline = Velocity(), None
+        walking = self._loco.moving
+        if walking:
+            # a biped mid-stride cannot freeze its joints: it finishes the step and puts its feet together
+            self._loco.stop(promptly=True)
+        else:
+            self.backend.write(self._posture.freeze())
         applied = time.time()
         data: dict[str, Any] = {"source": command.source, "worker_latency_ms": (applied - received) * 1e3}
         if command.relayed_at_s is not None:
             data["server_latency_ms"] = (applied - command.relayed_at_s) * 1e3
         if command.client_time_s is not None:
             data["latency_ms"] = (applied - command.client_time_s) * 1e3
-        self._bus.publish("estop/latched", f"E-STOP latched ({command.source}): holding position", Level.ERROR, **data)
+        action = "stopping the walk, then holding" if walking else "holding position"
+        self._bus.publish("estop/latched", f"E-STOP latched ({command.source}): {action}", Level.ERROR, **data)
         self._publish_state(self.backend.read())
 
     def _release_estop(self, command: ReleaseEStop) -> CommandReply:
@@ -247,6 +298,11 @@ class RobotWorker:
             return CommandReply(False, "the robot has fallen: it must be reset first", Refusal.ESTOP_LATCHED)
         return None
 
+    def _refuse_if_teleop(self) -> CommandReply | None:
+        if self._teleop_active:
+            return CommandReply(False, "teleop is active: release the controls before running a plan", Refusal.BUSY)
+        return None
+
     def _world_context(self) -> WorldContext:
         return WorldContext.from_layout(self.layout, held_object=self._held_object)
 
@@ -259,7 +315,7 @@ class RobotWorker:
                 False, "command too long", Refusal.INVALID, (f"at most {MAX_COMMAND_CHARS} characters",)
             )
         with self._lock:
-            if refusal := self._refuse_if_unsafe():
+            if refusal := self._refuse_if_unsafe() or self._refuse_if_teleop():
                 return refusal
         try:
             plan = self.planner.plan(text, self._world_context())
@@ -274,7 +330,7 @@ class RobotWorker:
 
     def _execute_plan(self, command: ExecutePlan) -> CommandReply:
         with self._lock:
-            if refusal := self._refuse_if_unsafe():
+            if refusal := self._refuse_if_unsafe() or self._refuse_if_teleop():
                 return refusal
         checked, errors = validate_plan_json(command.plan_json, self._world_context())
         if checked is None:
@@ -283,7 +339,7 @@ class RobotWorker:
 
     def _replan(self) -> CommandReply:
         with self._lock:
-            if refusal := self._refuse_if_unsafe():
+            if refusal := self._refuse_if_unsafe() or self._refuse_if_teleop():
                 return refusal
             last = self._last_command
         if last is None:
@@ -300,7 +356,8 @@ class RobotWorker:
 
     def _enqueue(self, text: str, plan: Plan, new_command: bool, command_id: int | None = None) -> CommandReply:
         with self._lock:
-            if refusal := self._refuse_if_unsafe():  # an e-stop may have come in while planning
+            # an e-stop (or teleop) may have come in while planning
+            if refusal := self._refuse_if_unsafe() or self._refuse_if_teleop():
                 return refusal
             if new_command:
                 command_id = self._next_command_id
@@ -366,6 +423,88 @@ class RobotWorker:
             )
 
     # ----------------------------------------------------------------------------------------------------------
+    # teleop, postures, reset
+
+    def _clock(self) -> float:
+        """The deadman's clock: wall time when driving in real time, sim time when running headless."""
+        return time.monotonic() if self.realtime else self._sim_time
+
+    def _teleop(self, command: Teleop) -> CommandReply:
+        try:
+            velocity = clip_velocity(Velocity(command.vx, command.vy, command.yaw_rate), self._loco.velocity.limits)
+        except (TypeError, ValueError):
+            return CommandReply(False, "teleop velocity must be finite numbers", Refusal.INVALID)
+        with self._lock:
+            if refusal := self._refuse_if_unsafe():
+                return refusal
+            if self._current_job is not None or not self._jobs.empty():
+                return CommandReply(False, "a plan is running: cancel it to teleoperate", Refusal.BUSY)
+            if self._reset_pending:
+                return CommandReply(False, "the robot is being reset", Refusal.BUSY)
+            self._teleop_velocity = velocity
+            self._teleop_deadline = self._clock() + TELEOP_TIMEOUT_S
+            started = not self._teleop_active
+            self._teleop_active = True
+            if self._posture_name != Posture.STAND:
+                self._posture_name = Posture.STAND
+                self._posture.move_to(self._stand)
+        if started:
+            self._bus.publish("teleop/started", f"teleop started ({command.source})", source=command.source)
+        v = velocity
+        return CommandReply(True, f"teleop vx {v.vx:.2f} m/s, vy {v.vy:.2f} m/s, yaw rate {v.yaw_rate:.2f} rad/s")
+
+    def _stop_teleop(self, source: str, how: str) -> CommandReply:
+        with self._lock:
+            active = self._teleop_active
+            self._teleop_velocity, self._teleop_deadline = Velocity(), None
+        if active:
+            self._bus.publish("teleop/stop", f"teleop {how} ({source}): stopping", source=source)
+        return CommandReply(True, "stopping" if active else "teleop is not active")
+
+    def _set_posture(self, posture: Posture) -> CommandReply:
+        with self._lock:
+            if refusal := self._refuse_if_unsafe() or self._refuse_if_teleop():
+                return refusal
+            if self._current_job is not None:
+                return CommandReply(False, "a plan is running: cancel it first", Refusal.BUSY)
+            if self._loco.moving:
+                return CommandReply(False, "the robot is walking: stop it first", Refusal.BUSY)
+            self._posture_name = posture
+            goal = self._stand if posture == Posture.STAND else _crouch_targets()
+            self._posture.move_to(goal)
+        self._bus.publish("posture/set", f"moving to the {posture.value} posture", posture=posture.value)
+        return CommandReply(True, f"moving to the {posture.value} posture")
+
+    def _reset_robot(self) -> CommandReply:
+        if not hasattr(self.backend, "reset"):
+            return CommandReply(False, "reset is only possible in simulation", Refusal.UNSUPPORTED)
+        with self._lock:
+            self._reset_pending = True
+            self._teleop_velocity, self._teleop_deadline = Velocity(), None
+            if self._current_job:
+                self._current_job.cancel.set()
+            self._drain_queued_jobs("cancelled by reset")
+        self._wake.set()
+        return CommandReply(True, "resetting the robot to standing at its start pose")
+
+    def _apply_pending_reset(self) -> None:
+        """Control thread: the robot stands again at its start pose, as after start-up."""
+        with self._lock:
+            if not self._reset_pending:
+                return
+            self._reset_pending = False
+            self._fallen = False
+            self._teleop_active = False
+            self._held_object = None
+            self._posture_name = Posture.STAND
+        self._loco.halt()
+        self.backend.reset(self._stand)
+        self._posture.hold(self._stand)
+        self._measured = self.backend.read()
+        self._loco.reset_odometry(measured_pose(self._measured), sensors(self._measured))
+        self._bus.publish("robot/reset", "robot reset: standing at its start pose")
+
+    # ----------------------------------------------------------------------------------------------------------
     # task thread
 
     def _task_loop(self) -> None:
@@ -378,7 +517,7 @@ class RobotWorker:
                     continue
                 self._current_job = job
                 # A new plan starts from the standing posture (a move, so only after an explicit command).
-                self._posture.move_to(self.backend.stand_targets())
+                self._posture.move_to(self._stand)
             context = ExecutionContext(
                 cancel=job.cancel,
                 say=lambda text: self._bus.publish("speech/say", text, text=text),
@@ -444,6 +583,7 @@ class RobotWorker:
                     if self._wake.wait(remaining):
                         self._wake.clear()
                         self._apply_pending_estop()
+                        self._apply_pending_reset()
                     continue
             started = time.perf_counter()
             try:
@@ -461,18 +601,54 @@ class RobotWorker:
     def _tick(self) -> None:
         """One control period: targets out, physics (or the servos) forward, measurements in, state published."""
         self._apply_pending_estop()
-        self.backend.write(self._posture.update(self.dt))
+        self._apply_pending_reset()
+        self._targets = self._control_targets(self._measured)
+        self.backend.write(self._targets)
         self.backend.step(self.dt)
         measured = self.backend.read()
+        self._measured = measured
         self._sim_time = measured.sim_time_s
         self._stats.update_rtf(self._sim_time)
         if measured.fallen and not self._fallen:
             self._on_fall(measured)
         self._publish_state(measured)
 
+    def _control_targets(self, measured: Measurements) -> np.ndarray:
+        """Joint targets: locomotion owns the joints in the walk-ready stance (standing balanced, or walking);
+        the posture controller otherwise (crouching, moving between postures, after a fall)."""
+        with self._lock:
+            if self._teleop_deadline is not None and self._clock() > self._teleop_deadline:
+                self._teleop_velocity, self._teleop_deadline = Velocity(), None
+                deadman = True
+            else:
+                deadman = False
+            fallen = self._fallen
+            velocity = self._teleop_velocity if not self._estop_latched else Velocity()
+            in_stance = self._posture_name == Posture.STAND and self._posture.settled
+        if deadman:
+            self._bus.publish("teleop/deadman", f"no teleop input for {TELEOP_TIMEOUT_S * 1e3:.0f} ms: stopping",
+                              Level.WARN)  # fmt: skip
+        if fallen or not in_stance:
+            return self._posture.update(self.dt)
+        self._loco.set_velocity(velocity)
+        targets = self._loco.update(sensors(measured), self._posture.goal)
+        if not self._loco.moving:
+            self._posture.hold(self._stand)
+            with self._lock:
+                ended = self._teleop_active and self._teleop_deadline is None
+                if ended:
+                    self._teleop_active = False
+            if ended:
+                self._bus.publish("teleop/ended", "teleop ended: standing")
+        return targets
+
     def _on_fall(self, measured: Measurements) -> None:
+        self._loco.halt()
+        self._posture.hold(self._targets)  # hold the last references: no sudden move on the ground
         with self._lock:
             self._fallen = True
+            self._teleop_active = False
+            self._teleop_velocity, self._teleop_deadline = Velocity(), None
             if self._current_job:
                 self._current_job.cancel.set()
         self._bus.publish("robot/fell", f"the robot fell (tilt {measured.tilt_deg:.0f} deg)", Level.ERROR,
@@ -482,7 +658,17 @@ class RobotWorker:
         with self._lock:
             job = self._current_job
             latched = self._estop_latched
-            mode = Mode.FALLEN if self._fallen else Mode.ESTOP if latched else Mode.EXECUTING if job else Mode.IDLE
+            if self._fallen:
+                mode = Mode.FALLEN
+            elif latched:
+                mode = Mode.ESTOP
+            elif job:
+                mode = Mode.EXECUTING
+            elif self._teleop_active:
+                mode = Mode.TELEOP
+            else:
+                mode = Mode.IDLE
+            posture = self._posture_name.value if self._posture.settled else "moving"
             shown = job or self._finished_job
             plan_status = shown.status if shown else None
         position = measured.base_position
@@ -501,5 +687,32 @@ class RobotWorker:
                 held_object=self._held_object,
                 plan=plan_status,
                 control=self._stats.snapshot(),
+                locomotion=self._locomotion_state(posture),
             )
         )
+
+    def _locomotion_state(self, posture: str) -> LocomotionState:
+        loco = self._loco
+        target, current, pose = loco.velocity.target, loco.velocity.current, loco.odometry.pose
+        overlay = loco.overlay()
+        state = LocomotionState(
+            phase=loco.phase.value,
+            posture=posture,
+            command=(target.vx, target.vy, target.yaw_rate),
+            velocity=(current.vx, current.vy, current.yaw_rate),
+            estimated_pose=(pose.x, pose.y, pose.yaw),
+        )
+        if overlay is None:
+            return state
+        return replace(
+            state,
+            footsteps=tuple(Footprint(side, x, y, yaw) for side, x, y, yaw in overlay.footsteps),
+            com=overlay.com,
+            zmp=overlay.zmp,
+            support=overlay.support,
+        )
+
+
+def _crouch_targets() -> np.ndarray:
+    posture = humanoid_v1.crouch_posture()
+    return np.array([posture[n] for n in humanoid_v1.JOINT_NAMES])

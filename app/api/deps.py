@@ -12,6 +12,8 @@ REFUSAL_STATUS = {
     Refusal.ESTOP_LATCHED: 409,
     Refusal.NOT_LATCHED: 409,
     Refusal.NOTHING_TO_REPLAN: 409,
+    Refusal.BUSY: 409,
+    Refusal.UNSUPPORTED: 501,
     Refusal.INVALID: 422,
     Refusal.UNAVAILABLE: 503,
 }

@@ -11,7 +11,19 @@ from pydantic import BaseModel, ConfigDict, Field
 from app.api.deps import raise_if_refused, runtime
 from app.runtime import Runtime
 from app.serialize import event_json, reply_json, state_json
-from robot.interface import CancelPlan, EStop, ExecutePlan, ReleaseEStop, Replan, RunCommand
+from robot.interface import (
+    CancelPlan,
+    EStop,
+    ExecutePlan,
+    Posture,
+    ReleaseEStop,
+    Replan,
+    ResetRobot,
+    RunCommand,
+    SetPosture,
+    StopTeleop,
+    Teleop,
+)
 from robot.worker import MAX_COMMAND_CHARS
 
 router = APIRouter(prefix="/api", tags=["robot"])
@@ -33,6 +45,21 @@ class EStopIn(BaseModel):
     client_time_s: float | None = Field(
         None, allow_inf_nan=False, description="Unix time of the press, for latency measurement"
     )
+
+
+class TeleopIn(BaseModel):
+    """Velocity in the robot's frame. A deadman: repeat it at least every 300 ms, or the robot stops."""
+
+    model_config = ConfigDict(extra="forbid")
+    vx: float = Field(0.0, allow_inf_nan=False, description="forward, m/s (clipped to the walking limits)")
+    vy: float = Field(0.0, allow_inf_nan=False, description="to the left, m/s")
+    yaw_rate: float = Field(0.0, allow_inf_nan=False, description="counter-clockwise, rad/s")
+    source: str = Field("api", max_length=16, pattern=r"^[a-z_-]+$")
+
+
+class PostureIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    posture: Posture
 
 
 @router.get("/health")
@@ -118,5 +145,35 @@ def estop(rt: RuntimeDep, body: EStopIn | None = None) -> dict[str, Any]:
 def estop_reset(rt: RuntimeDep) -> dict[str, Any]:
     """Release a latched e-stop. Never restarts motion: a new command or a replan does."""
     reply = rt.worker.submit(ReleaseEStop(source="api"))
+    raise_if_refused(reply)
+    return reply_json(reply)
+
+
+@router.post("/teleop")
+def teleop(body: TeleopIn, rt: RuntimeDep) -> dict[str, Any]:
+    """Drive the robot's velocity (409 while a plan runs, after a fall or under e-stop)."""
+    reply = rt.worker.submit(Teleop(body.vx, body.vy, body.yaw_rate, body.source))
+    raise_if_refused(reply)
+    return reply_json(reply)
+
+
+@router.post("/teleop/stop")
+def teleop_stop(rt: RuntimeDep) -> dict[str, Any]:
+    """Input ended: decelerate and stop."""
+    return reply_json(rt.worker.submit(StopTeleop(source="api")))
+
+
+@router.post("/posture")
+def posture(body: PostureIn, rt: RuntimeDep) -> dict[str, Any]:
+    """Stand (the walk-ready stance) or crouch; 409 while walking, running a plan, or under e-stop."""
+    reply = rt.worker.submit(SetPosture(body.posture))
+    raise_if_refused(reply)
+    return reply_json(reply)
+
+
+@router.post("/reset")
+def reset(rt: RuntimeDep) -> dict[str, Any]:
+    """Simulation: put the robot back standing at its start pose (after a fall); 501 on hardware."""
+    reply = rt.worker.submit(ResetRobot())
     raise_if_refused(reply)
     return reply_json(reply)

@@ -13,6 +13,10 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
         from app.bench.core import run_core
 
         result = run_core(presses=args.presses, viewers=args.viewers, duration_s=args.duration)
+    elif suite == "walk":
+        from app.bench.walk import run_walk
+
+        result = run_walk(scripts=args.scripts, duration_s=args.script_duration, seed=args.seed or 0)
     else:  # pragma: no cover - argparse restricts the choices
         raise SystemExit(f"unknown suite {suite}")
     text = json.dumps(result, indent=2)

@@ -10,8 +10,12 @@ control loop (`robot.control.gait_process`).
 
 from __future__ import annotations
 
+import contextlib
 import math
+import os
+import sys
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -74,8 +78,34 @@ def write_placo_model(directory: Path) -> Path:
     return path
 
 
+@contextlib.contextmanager
+def native_stdout_silenced() -> Iterator[None]:
+    """placo's C++ prints "Loading model" to the process's stdout, which must stay clean (`humanoid run --json`)."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, 1)
+        yield
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
+        os.close(devnull)
+
+
 def load_placo_robot(model_path: Path) -> placo.HumanoidRobot:
-    return placo.HumanoidRobot(str(model_path), placo.Flags.mjcf)
+    """placo's model of humanoid_v1, its joints set to the standing posture.
+
+    The IK must start from bent knees: from placo's neutral state (all zeros) the knees sit on their singularity,
+    and the right knee, which bends negative, gets pushed onto its +0.05 rad stop and stays there (a straight
+    right leg, a bent left one: the robot stood 6 degrees tilted and walked lopsided).
+    """
+    with native_stdout_silenced():
+        robot = placo.HumanoidRobot(str(model_path), placo.Flags.mjcf)
+    for name, value in humanoid_v1.stand_posture().items():
+        robot.set_joint(name, value)
+    robot.update_kinematics()
+    return robot
 
 
 @dataclass(frozen=True)

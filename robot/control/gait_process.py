@@ -13,6 +13,7 @@ import os
 import pickle
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 from robot.control.gait import GaitPlannerCore, GaitSegment, StepCommand
@@ -68,6 +69,7 @@ class ProcessGaitPlanner:
         self._requests = os.fdopen(self._request_write, "wb")
         self._answers = os.fdopen(self._answer_read, "rb")
         self._outstanding = 0
+        self.last_wait_ms = 0.0  # how long the last result() blocked (in real time it never should)
         ready = pickle.load(self._answers)
         if ready != "ready":
             raise GaitPlannerError(f"gait planner failed to start: {ready}")
@@ -82,7 +84,9 @@ class ProcessGaitPlanner:
     def result(self, block: bool) -> GaitSegment | None:
         if not self._outstanding:
             return None
+        started = time.perf_counter()
         answer = pickle.load(self._answers)  # a pipe read; only ever called once the answer is due
+        self.last_wait_ms = (time.perf_counter() - started) * 1e3
         self._outstanding = 0
         if isinstance(answer, BaseException):
             raise GaitPlannerError(f"gait planning failed: {answer!r}")

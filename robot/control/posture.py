@@ -28,6 +28,15 @@ class PostureController:
         self._goal = self._targets.copy()
         return self._targets.copy()
 
+    def hold(self, targets: np.ndarray) -> None:
+        """Take over from another controller: hold `targets` (what it last commanded) from now on."""
+        self._targets = np.array(targets, dtype=float)
+        self._goal = self._targets.copy()
+
+    @property
+    def goal(self) -> np.ndarray:
+        return self._goal.copy()
+
     def update(self, dt: float) -> np.ndarray:
         """Targets for this tick."""
         step = np.clip(self._goal - self._targets, -self._max_speed * dt, self._max_speed * dt)

@@ -72,6 +72,7 @@ class WalkingController:
         self._last_request = 0.0
         self._targets = self.ready_targets.copy()
         self.last_plan_ms = 0.0
+        self.stepped = False  # a foot has left the ground since this walk started
 
     @property
     def active(self) -> bool:
@@ -96,6 +97,7 @@ class WalkingController:
             if _is_still(self._command):
                 return None
             self._t = t = 0.0
+            self.stepped = False
             self._targets = self.ik.reset_standing()
             self._request("start", t + PLAN_LEAD_S)
             self.phase = WalkPhase.STARTING
@@ -115,12 +117,22 @@ class WalkingController:
                 self._request("replan", t + PLAN_LEAD_S)
         segment = self._segment
         if segment is not None:
-            self._targets = self.ik.track(segment, segment.index(t))
+            i = segment.index(t)
+            self.stepped = self.stepped or bool(segment.support[i])
+            self._targets = self.ik.track(segment, i)
             if self.phase == WalkPhase.STOPPING and segment.ends_standing and t >= segment.t_end - 1e-9:
                 self.phase = WalkPhase.STANDING
                 self._segment = None
         self._t = t + self.dt
         return self._targets.copy()
+
+    def swing_leg(self) -> str | None:
+        """The leg in the air at the current gait sample ("left"/"right"), or None in double support or standing."""
+        segment = self._segment
+        if segment is None:
+            return None
+        support = int(segment.support[segment.index(self._t - self.dt)])
+        return {1: "right", 2: "left"}.get(support)
 
     def view(self) -> GaitView | None:
         segment = self._segment

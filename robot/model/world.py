@@ -249,3 +249,8 @@ def generate_world(seed: int = 0, obstacle_count: int = 3) -> WorldLayout:
         if len(obstacles) == obstacle_count and reachable(layout, [p.staging for p in places]):
             return layout
     raise RuntimeError(f"could not generate a solvable world for seed {seed}")  # pragma: no cover
+
+
+def open_floor() -> WorldLayout:
+    """No walls, furniture or objects: for walking trials, which must not end against a wall."""
+    return WorldLayout(seed=0, places=(), objects=(), furniture=(), obstacles=(), walls=(), robot_start=(0.0, 0.0, 0.0))

@@ -60,7 +60,7 @@ def default_capabilities() -> dict[str, Capability]:
     """What this build can do. Later capabilities (walking, perception, grasping) replace the placeholders."""
     return {
         "say": say_capability,
-        "navigate_to": unavailable("navigation is not available in this build: the robot cannot walk yet"),
+        "navigate_to": unavailable("navigation is not available in this build: no path planner yet (use teleop)"),
         "detect_object": unavailable("object detection is not available in this build: no camera pipeline yet"),
         "pick_object": unavailable("grasping is not available in this build: the hands have no grippers yet"),
         "place_object": unavailable("placing is not available in this build: the hands have no grippers yet"),

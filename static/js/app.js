@@ -71,6 +71,7 @@ function connect() {
     else if (m.type === "event") addEvent(m.event);
     else if (m.type === "hello") { $("events").innerHTML = ""; m.recent_events.forEach(addEvent); }
     else if (m.type === "estop_release_ack" && !m.accepted) showResult(m.message, true);
+    else if (m.type === "teleop_ack" && humanoid.onTeleopAck) humanoid.onTeleopAck(m);
   };
 }
 
@@ -148,7 +149,7 @@ function renderState(s) {
   humanoid.state = s;
   const latched = s.estop_latched;
   $("mode").textContent = "mode: " + s.mode;
-  $("mode").className = "badge " + (latched || s.fallen ? "badge-err" : s.mode === "executing" ? "badge-warn" : "badge-ok");
+  $("mode").className = "badge " + (latched || s.fallen ? "badge-err" : ["executing", "teleop"].includes(s.mode) ? "badge-warn" : "badge-ok");
   $("latched-banner").hidden = !latched;
   $("release").hidden = !latched;
   $("estop").classList.toggle("latched", latched);
@@ -159,6 +160,7 @@ function renderState(s) {
   $("st-rtf").textContent = fmt(s.control.rtf, 2);
   $("st-tick").textContent = `${fmt(s.control.tick_p50_ms, 2)} / ${fmt(s.control.tick_p99_ms, 2)} ms, ${s.control.deadline_misses} missed`;
   $("st-held").textContent = s.held_object || "nothing";
+  if (humanoid.renderLocomotion) humanoid.renderLocomotion(s.locomotion);
   renderPlan(s.plan);
 }
 

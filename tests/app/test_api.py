@@ -38,7 +38,8 @@ def test_config_names_places_and_objects(client) -> None:
 def test_openapi_lists_the_endpoints(client) -> None:
     paths = client.get("/openapi.json").json()["paths"]
     for path in ("/api/health", "/api/commands", "/api/estop", "/api/estop/reset", "/api/replan",
-                 "/api/sessions", "/api/sessions/{session_id}"):  # fmt: skip
+                 "/api/sessions", "/api/sessions/{session_id}", "/api/teleop", "/api/teleop/stop", "/api/posture",
+                 "/api/reset"):  # fmt: skip
         assert path in paths
 
 
@@ -53,7 +54,7 @@ def test_command_is_planned_and_executed(client) -> None:
 def test_unbuilt_capability_is_reported_not_faked(client) -> None:
     assert client.post("/api/commands", json={"text": "go to the dock"}).status_code == 202
     plan = wait_until(lambda: (p := plan_state(client)) and p["state"] == "failed" and p)
-    assert plan["steps"][0]["state"] == "failed" and "cannot walk" in plan["steps"][0]["detail"]
+    assert plan["steps"][0]["state"] == "failed" and "no path planner" in plan["steps"][0]["detail"]
     assert plan["steps"][1]["state"] == "skipped"
 
 
@@ -169,3 +170,23 @@ def test_health_says_when_the_worker_is_down(client) -> None:
     response = client.get("/api/health")
     assert response.status_code == 503
     assert response.json()["status"] == "worker_down"
+
+
+def test_teleop_posture_and_reset_endpoints(client) -> None:
+    assert client.post("/api/teleop", json={"vx": "nan"}).status_code == 422
+    assert client.post("/api/teleop", json={"vx": 0.1, "spin": 1}).status_code == 422
+    reply = client.post("/api/teleop", json={"vx": 0.1, "source": "test"})
+    assert reply.status_code == 200 and reply.json()["accepted"]
+    busy = client.post("/api/commands", json={"text": "say hello"})
+    assert busy.status_code == 409 and "teleop is active" in busy.json()["detail"]["message"]
+    assert client.post("/api/posture", json={"posture": "crouch"}).status_code == 409
+    assert client.post("/api/teleop/stop").json()["accepted"]
+    worker = client.runtime.worker
+    assert worker.wait_for(lambda s: s.mode.value == "idle", 5.0)
+    assert client.post("/api/posture", json={"posture": "sit"}).status_code == 422
+    assert client.post("/api/posture", json={"posture": "crouch"}).status_code == 200
+    assert worker.wait_for(lambda s: s.locomotion.posture == "crouch", 5.0)
+    assert client.post("/api/reset").status_code == 200
+    assert worker.wait_for(lambda s: s.locomotion.posture == "stand" and not s.fallen, 5.0)
+    state = client.get("/api/state").json()
+    assert state["locomotion"]["phase"] == "standing" and state["mode"] == "idle"

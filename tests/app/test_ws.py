@@ -41,3 +41,19 @@ def test_socket_answers_bad_messages_without_closing(client) -> None:
         assert "larger than" in receive_until(ws, lambda m: m["type"] == "error")["message"]
         ws.send_json({"type": "ping", "t": 1})
         assert receive_until(ws, lambda m: m["type"] == "pong")["t"] == 1
+
+
+def test_socket_teleop_drives_and_closing_the_socket_stops_the_robot(client) -> None:
+    worker = client.runtime.worker
+    with client.websocket_connect("/ws") as ws:
+        ws.receive_json()
+        ws.send_json({"type": "teleop", "vx": "fast"})
+        assert "finite number" in receive_until(ws, lambda m: m["type"] == "teleop_ack")["message"]
+        for _ in range(8):
+            ws.send_json({"type": "teleop", "vx": 0.1, "vy": 0.0, "yaw_rate": 0.0})
+            time.sleep(0.1)
+        receive_until(ws, lambda m: m["type"] == "state" and m["state"]["mode"] == "teleop")
+    # the browser went away while driving: stopped at once, not only by the deadman
+    stop = next(e for e in reversed(worker.recent_events()) if e.kind.startswith("teleop/"))
+    assert stop.kind == "teleop/stop" and stop.data["source"] == "browser-disconnect"
+    assert worker.wait_for(lambda s: s.mode.value == "idle", 5.0)

@@ -54,7 +54,7 @@ def test_typed_command_runs_and_the_plan_shows_per_step_status(page) -> None:
     steps = page.locator("#plan-steps li")
     expect(steps).to_have_count(4)
     expect(steps.first).to_have_attribute("data-state", "failed", timeout=15_000)
-    expect(steps.first).to_contain_text("cannot walk")
+    expect(steps.first).to_contain_text("no path planner")
     expect(page.locator("#plan-state")).to_have_text("failed")
 
     page.fill("#command-text", "pick up the purple elephant")
@@ -80,6 +80,31 @@ def test_estop_button_latches_the_robot_and_release_is_explicit(page, server) ->
     expect(page.locator("#mode")).to_have_text("mode: idle", timeout=5_000)
     expect(page.locator("#latched-banner")).to_be_hidden()
     assert not httpx.get(server.url + "/api/state").json()["estop_latched"]
+
+
+def test_keyboard_teleop_walks_the_robot_and_letting_go_stops_it(page, server) -> None:
+    expect = playwright_api.expect
+    start = httpx.get(server.url + "/api/state").json()["pose"]
+    page.locator("body").click(position={"x": 5, "y": 300})  # focus the page, not the command box
+    page.keyboard.down("w")
+    expect(page.locator("#mode")).to_have_text("mode: teleop", timeout=5_000)
+    expect(page.locator("#st-walk")).to_contain_text("walking", timeout=5_000)
+    page.wait_for_timeout(3_000)
+    page.keyboard.up("w")
+    expect(page.locator("#teleop-cmd")).to_have_text("released: stopping")
+    expect(page.locator("#mode")).to_have_text("mode: idle", timeout=10_000)
+    end = httpx.get(server.url + "/api/state").json()
+    assert not end["fallen"] and end["locomotion"]["phase"] == "standing"
+    assert abs(end["pose"]["x"] - start["x"]) + abs(end["pose"]["y"] - start["y"]) > 0.1
+    # the joystick drives too: drag the knob up, then let go
+    box = page.locator("#joystick").bounding_box()
+    cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+    page.mouse.move(cx, cy)
+    page.mouse.down()
+    page.mouse.move(cx, cy - box["height"] / 2)
+    expect(page.locator("#mode")).to_have_text("mode: teleop", timeout=5_000)
+    page.mouse.up()
+    expect(page.locator("#mode")).to_have_text("mode: idle", timeout=10_000)
 
 
 def test_sessions_page_shows_the_timeline(page, server) -> None:

@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from robot.control.balance import AnkleBalance
-from robot.control.gait import write_placo_model
-from robot.control.gait_process import InlineGaitPlanner
-from robot.control.locomotion import LocomotionController, Velocity, VelocityLimits, VelocityShaper
+from robot.control.locomotion import Velocity, VelocityLimits, VelocityShaper
+from robot.control.stack import build_locomotion, sensors
+from robot.control.walk_trial import ScriptSegment, run_trial
 from robot.control.walking import WalkPhase
-from robot.control.whole_body import WholeBodyIK
+from robot.model import humanoid_v1
+from robot.model.world import open_floor
 from robot.sim.backend import MujocoSimBackend
 
 DT = 0.01
@@ -28,21 +28,58 @@ def test_velocity_is_clipped_and_rate_limited() -> None:
 
 
 def test_stands_balanced_in_the_walk_ready_posture(layout, scene_model, tmp_path) -> None:
-    """Standing still under the locomotion controller (IMU feedback on): upright, on both feet, not drifting."""
+    """Standing still under the locomotion controller (IMU feedback on): upright, symmetric, on both feet."""
     sim = MujocoSimBackend(layout, scene_model)
-    model = write_placo_model(tmp_path)
-    loco = LocomotionController(
-        InlineGaitPlanner(model, DT), WholeBodyIK(model, DT), AnkleBalance(sim.joint_axes()), DT
-    )
-    sim.reset(loco.stand_targets)
+    loco = build_locomotion(sim, tmp_path, planner_process=False)
+    stand = loco.stand_targets
+    names = humanoid_v1.JOINT_NAMES
+    # the IK's stance is symmetric (a knee stuck on its stop once made the robot stand 6 degrees tilted)
+    assert stand[names.index("l_knee")] == pytest.approx(-stand[names.index("r_knee")], abs=1e-3)
+    sim.reset(stand)
     start = sim.read()
     for _ in range(300):
-        m = sim.read()
-        sim.write(loco.update(m.imu_quat, m.imu_gyro, loco.stand_targets))
+        sim.write(loco.update(sensors(sim.read()), stand))
         sim.step(DT)
     end = sim.read()
     assert loco.phase == WalkPhase.STANDING
-    assert not end.fallen and end.tilt_deg < 3.0
+    assert not end.fallen and end.tilt_deg < 2.0
     assert np.linalg.norm(end.base_position[:2] - start.base_position[:2]) < 0.01
     left, right = end.foot_forces.sum(axis=1)
-    assert left > 10.0 and right > 10.0  # weight on both feet
+    assert left > 10.0 and right > 10.0 and abs(left - right) < 5.0  # weight shared by both feet
+
+
+def _walk(script: list[ScriptSegment], tmp_path):
+    sim = MujocoSimBackend(open_floor())
+    loco = build_locomotion(sim, tmp_path, planner_process=False)
+    return run_trial(script, sim, loco), sim, loco
+
+
+def test_walks_a_20_s_script_upright_and_follows_it(tmp_path) -> None:
+    """Forward, sideways, turning and backward in one script: never falls, ends where the command said."""
+    script = [
+        ScriptSegment(5.0, Velocity(vx=0.1)),
+        ScriptSegment(4.0, Velocity(vy=0.04)),
+        ScriptSegment(4.0, Velocity(yaw_rate=0.5)),
+        ScriptSegment(4.0, Velocity(vx=-0.08)),
+        ScriptSegment(2.0, Velocity()),
+    ]
+    result, sim, loco = _walk(script, tmp_path)
+    assert not result.fell
+    assert result.max_tilt_deg < 20.0
+    assert result.commanded_distance_m > 0.9
+    assert result.tracking_error < 0.2  # final position within 20 % of the commanded path length
+    assert abs(result.yaw_error_rad) < 0.2
+    assert loco.phase == WalkPhase.STANDING  # stopped at the end of the script
+    # leg odometry (encoders, IMU, foot pads) agrees with the simulator's ground truth
+    estimate, truth = loco.odometry.pose, sim.read().base_position
+    assert np.hypot(estimate.x - truth[0], estimate.y - truth[1]) < 0.1
+
+
+@pytest.mark.parametrize("vy", [0.05, -0.05])
+def test_sideways_walking_goes_the_commanded_way(tmp_path, vy: float) -> None:
+    """Open loop this robot once drifted the wrong way sideways: the bar to beat."""
+    result, sim, _ = _walk([ScriptSegment(6.0, Velocity(vy=vy)), ScriptSegment(1.5, Velocity())], tmp_path)
+    assert not result.fell
+    sideways = sim.read().base_position[1]  # the open floor starts the robot at the origin facing +x
+    assert np.sign(sideways) == np.sign(vy) and abs(sideways) > 0.2
+    assert result.tracking_error < 0.25

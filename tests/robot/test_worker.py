@@ -59,7 +59,7 @@ def test_capstone_fails_honestly_until_walking_exists(make_worker) -> None:
     assert worker.wait_for(plan_done(reply.command_id), 10.0)
     plan = worker.state().plan
     assert plan.state == PlanState.FAILED
-    assert plan.steps[0].state == StepState.FAILED and "cannot walk" in plan.steps[0].detail
+    assert plan.steps[0].state == StepState.FAILED and "no path planner" in plan.steps[0].detail
     assert all(s.state == StepState.SKIPPED for s in plan.steps[1:])
     assert worker.state().held_object is None
 
@@ -149,10 +149,10 @@ def test_a_fall_is_detected_reported_and_stops_motion(layout, scene_model) -> No
     from robot.worker import RobotWorker
 
     backend = MujocoSimBackend(layout, scene_model)
+    worker = RobotWorker(layout, backend=backend, realtime=False)  # stands the robot up at its start pose
     backend.data.qpos[2] = 0.1  # lying on the floor, rolled onto its side
     backend.data.qpos[3:7] = [np.cos(np.pi / 4), np.sin(np.pi / 4), 0.0, 0.0]
     mujoco.mj_forward(backend.model, backend.data)
-    worker = RobotWorker(layout, backend=backend, realtime=False)
     events = worker.subscribe()
     worker.start()
     try:

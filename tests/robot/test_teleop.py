@@ -1,0 +1,152 @@
+"""Teleop, postures, e-stop while walking, falls and reset, through the worker's public interface only."""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from robot.interface import (
+    CancelPlan,
+    EStop,
+    ExecutePlan,
+    Mode,
+    Posture,
+    Refusal,
+    ResetRobot,
+    RunCommand,
+    SetPosture,
+    StopTeleop,
+    Teleop,
+)
+from tests.robot.test_worker import wait_event
+
+
+def _drive(worker, command: Teleop, seconds: float, period_s: float = 0.1) -> float:
+    """Send the teleop command repeatedly, as the browser does while a key is held; returns when it last sent."""
+    deadline = time.monotonic() + seconds
+    while True:
+        assert worker.submit(command).accepted
+        last = time.time()
+        if time.monotonic() >= deadline:
+            return last
+        time.sleep(period_s)
+
+
+def _forward_of_start(worker, start) -> float:
+    state = worker.state()
+    dx, dy = state.base_position[0] - start.base_position[0], state.base_position[1] - start.base_position[1]
+    return math.cos(start.base_yaw_rad) * dx + math.sin(start.base_yaw_rad) * dy
+
+
+def test_teleop_walks_forward_and_the_deadman_stops_it(make_worker) -> None:
+    worker = make_worker(realtime=True)
+    events = worker.subscribe()
+    start = worker.state()
+    last_input = _drive(worker, Teleop(vx=0.12, source="test"), 4.0)
+    state = worker.state()
+    assert state.mode == Mode.TELEOP and state.locomotion.phase == "walking"
+    assert state.locomotion.footsteps and state.locomotion.com is not None  # what the mirror draws
+    assert _forward_of_start(worker, start) > 0.2
+    # input stops: within 300 ms the deadman stops the walk, then the robot stands and teleop ends
+    deadman = wait_event(events, "teleop/deadman", timeout=2.0)
+    assert 0.3 <= deadman.wall_time_s - last_input < 0.35
+    wait_event(events, "teleop/ended", timeout=5.0)
+    assert worker.wait_for(lambda s: s.mode == Mode.IDLE, 1.0)
+    state = worker.state()
+    assert state.mode == Mode.IDLE and state.locomotion.phase == "standing" and not state.fallen
+    assert state.locomotion.footsteps == ()
+
+
+def test_teleop_and_plans_are_mutually_exclusive(make_worker) -> None:
+    worker = make_worker(realtime=True)
+    long_say = {"steps": [{"action": "say", "args": {"text": "one two three four five six seven eight nine ten"}}]}
+    assert worker.submit(ExecutePlan(long_say)).accepted
+    assert worker.wait_for(lambda s: s.mode == Mode.EXECUTING, 2.0)
+    refused = worker.submit(Teleop(vx=0.1))
+    assert not refused.accepted and refused.refusal == Refusal.BUSY
+    worker.submit(CancelPlan())
+    assert worker.wait_for(lambda s: s.mode == Mode.IDLE, 2.0)
+    assert worker.submit(Teleop(vx=0.1)).accepted
+    assert worker.wait_for(lambda s: s.mode == Mode.TELEOP, 2.0)
+    refused = worker.submit(RunCommand("say hello"))
+    assert not refused.accepted and refused.refusal == Refusal.BUSY
+    refused = worker.submit(SetPosture(Posture.CROUCH))
+    assert not refused.accepted and refused.refusal == Refusal.BUSY
+    worker.submit(StopTeleop(source="test"))
+    assert worker.wait_for(lambda s: s.mode == Mode.IDLE, 5.0)
+    assert worker.submit(RunCommand("say hello")).accepted
+
+
+def test_bad_teleop_input_is_refused(make_worker) -> None:
+    worker = make_worker(realtime=False)
+    reply = worker.submit(Teleop(vx=float("nan")))
+    assert not reply.accepted and reply.refusal == Refusal.INVALID
+    reply = worker.submit(Teleop(vx=5.0))  # accepted, clipped to the walking limits
+    assert reply.accepted and "vx 0.20" in reply.message
+
+
+def test_estop_mid_stride_stops_the_walk_and_leaves_it_standing(make_worker) -> None:
+    worker = make_worker(realtime=True)
+    stop_driving = threading.Event()
+
+    def drive() -> None:
+        while not stop_driving.is_set():
+            worker.submit(Teleop(vx=0.15, source="test"))
+            time.sleep(0.1)
+
+    driver = threading.Thread(target=drive, daemon=True)
+    driver.start()
+    try:
+        assert worker.wait_for(lambda s: s.locomotion.phase == "walking", 5.0)
+        time.sleep(1.5)
+        assert worker.wait_for(lambda s: s.locomotion.support in ("left", "right"), 2.0)  # one foot in the air
+        assert worker.submit(EStop(source="test")).accepted
+        refused = worker.submit(Teleop(vx=0.15))
+        assert not refused.accepted and refused.refusal == Refusal.ESTOP_LATCHED
+    finally:
+        stop_driving.set()
+        driver.join()
+    assert worker.wait_for(lambda s: s.locomotion.phase == "standing", 5.0)
+    time.sleep(1.0)
+    state = worker.state()
+    assert state.mode == Mode.ESTOP and not state.fallen and state.tilt_deg < 10.0
+    assert state.locomotion.velocity == (0.0, 0.0, 0.0)
+
+
+def test_crouch_and_stand_postures(make_worker) -> None:
+    worker = make_worker(realtime=False)
+    stand_height = worker.state().base_position[2]
+    assert worker.submit(SetPosture(Posture.CROUCH)).accepted
+    assert worker.wait_for(lambda s: s.locomotion.posture == "crouch", 10.0)
+    assert worker.wait_for(lambda s: s.sim_time_s > 3.0, 10.0)
+    crouched = worker.state()
+    assert crouched.base_position[2] < stand_height - 0.02 and not crouched.fallen
+    assert worker.submit(SetPosture(Posture.STAND)).accepted
+    assert worker.wait_for(lambda s: s.locomotion.posture == "stand", 10.0)
+    assert worker.state().base_position[2] == pytest.approx(stand_height, abs=0.01)
+
+
+def test_a_fall_is_detected_reported_and_reset_puts_it_back_standing(make_worker) -> None:
+    worker = make_worker(realtime=False)
+    events = worker.subscribe()
+    start = worker.state()
+    trunk = worker.backend.model.body("body_link").id
+    worker.backend.data.xfrc_applied[trunk, 0] = 60.0  # a hard shove from behind (test access to the sim)
+    fell = wait_event(events, "robot/fell", timeout=10.0)
+    worker.backend.data.xfrc_applied[trunk, 0] = 0.0
+    assert fell.level >= 2
+    assert worker.wait_for(lambda s: s.mode == Mode.FALLEN, 2.0)
+    refused = worker.submit(Teleop(vx=0.1))
+    assert not refused.accepted
+    assert worker.submit(ResetRobot()).accepted
+    wait_event(events, "robot/reset", timeout=5.0)
+    reset_at = worker.state().sim_time_s
+    assert worker.wait_for(lambda s: s.sim_time_s > reset_at + 1.0, 10.0)
+    state = worker.state()
+    assert state.mode == Mode.IDLE and not state.fallen and state.tilt_deg < 3.0
+    assert np.allclose(state.base_position[:2], start.base_position[:2], atol=0.02)
+    assert worker.submit(Teleop(vx=0.1)).accepted
