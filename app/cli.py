@@ -123,6 +123,8 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--scripts", type=int, default=20, help="walk: random velocity scripts to run")
     bench.add_argument("--script-duration", type=float, default=60.0, help="walk: seconds per script")
     bench.add_argument("--seed", type=int, default=0, help="walk: seed of the first script")
+    bench.add_argument("--realtime-duration", type=float, default=30.0,
+                       help="walk: seconds of real-time walking for the control tick figures")  # fmt: skip
     bench.set_defaults(func=_bench)
     return parser
 

@@ -16,7 +16,8 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
     elif suite == "walk":
         from app.bench.walk import run_walk
 
-        result = run_walk(scripts=args.scripts, duration_s=args.script_duration, seed=args.seed or 0)
+        result = run_walk(scripts=args.scripts, duration_s=args.script_duration, seed=args.seed or 0,
+                          realtime_s=args.realtime_duration)  # fmt: skip
     else:  # pragma: no cover - argparse restricts the choices
         raise SystemExit(f"unknown suite {suite}")
     text = json.dumps(result, indent=2)

@@ -171,6 +171,13 @@ def _yaw(matrix: np.ndarray) -> float:
     return math.atan2(matrix[1, 0], matrix[0, 0])
 
 
+def _first_flying_side(command: StepCommand) -> placo.HumanoidRobot_Side:
+    """The foot that leads towards the motion: stepping right with the left foot first makes the left foot cross
+    over to the right one (the feet collided and the robot fell in 3 of 20 benchmark scripts)."""
+    lateral = command.dy if abs(command.dy) > 1e-4 else command.dtheta
+    return placo.HumanoidRobot_Side.right if lateral < 0 else placo.HumanoidRobot_Side.left
+
+
 class GaitPlannerCore:
     """placo's walk pattern generator and the current trajectory; single-threaded, no I/O."""
 
@@ -241,7 +248,7 @@ class GaitPlannerCore:
         self._footsteps.configure(c.dx, c.dy, c.dtheta, FOOTSTEPS_AHEAD)
         left = placo.flatten_on_floor(self.robot.get_T_world_left())
         right = placo.flatten_on_floor(self.robot.get_T_world_right())
-        footsteps = self._footsteps.plan(placo.HumanoidRobot_Side.left, left, right)
+        footsteps = self._footsteps.plan(_first_flying_side(c), left, right)
         supports = placo.FootstepsPlanner.make_supports(footsteps, t, True, self.parameters.has_double_support(), True)
         self._trajectory = self._walk.plan(supports, self.robot.com_world(), t)
         self._last_replan = t

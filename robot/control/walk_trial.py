@@ -22,8 +22,10 @@ from robot.control.stack import measured_pose as true_pose
 from robot.sim.backend import MujocoSimBackend
 
 DT = CONTROL_DT
-# Lateral drift is measured on straight segments from this long after their start, over at least 0.2 m.
+# Lateral drift is measured on straight segments from this long after their start, over at least 0.2 m, against
+# the heading averaged from HEADING_WINDOW_S to DRIFT_SETTLE_S.
 DRIFT_SETTLE_S = 1.0
+HEADING_WINDOW_S = 0.4
 
 
 @dataclass(frozen=True)
@@ -108,10 +110,16 @@ def run_trial(
     t = 0.0
     for duration, velocity in timeline:
         loco.set_velocity(velocity)
-        lateral_start, distance_start = 0.0, 0.0
+        line: Pose2D | None = None  # the straight line the robot is pointed along, once settled into the segment
+        heading = np.zeros(2)
+        distance_start = 0.0
         for i in range(round(duration / DT)):
+            if i >= int(HEADING_WINDOW_S / DT) and line is None:  # heading sways +-3 deg a step: average it
+                yaw = true_pose(backend.read()).yaw
+                heading += (math.cos(yaw), math.sin(yaw))
             if i == int(DRIFT_SETTLE_S / DT):  # the lag behind the previous segment's motion has resolved by now
-                lateral_start, distance_start = _lateral_offset(true_pose(backend.read()), ref), distance
+                here = true_pose(backend.read())
+                line, distance_start = Pose2D(here.x, here.y, math.atan2(heading[1], heading[0])), distance
             m = backend.read()
             planner = loco.walking.planner
             planner.last_wait_ms = 0.0
@@ -139,9 +147,9 @@ def run_trial(
                 nan = float("nan")
                 return TrialResult(True, t, distance, nan, nan, commanded_yaw, drifts, ticks, max_tilt)
         travelled = distance - distance_start
-        if velocity.vy == 0.0 and velocity.yaw_rate == 0.0 and duration > DRIFT_SETTLE_S and travelled > 0.2:
-            # sideways departure from the commanded straight line, per metre commanded
-            drifts.append(abs(_lateral_offset(true_pose(backend.read()), ref) - lateral_start) / travelled)
+        if line is not None and velocity.vy == 0.0 and velocity.yaw_rate == 0.0 and travelled > 0.2:
+            # sideways departure from the line the robot was pointed along, per metre commanded
+            drifts.append(abs(_lateral_offset(true_pose(backend.read()), line)) / travelled)
     end = true_pose(backend.read())
     error = math.hypot(end.x - ref.x, end.y - ref.y)
     yaw_error = (start.yaw + yaw_total) - ref.yaw

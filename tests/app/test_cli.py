@@ -44,3 +44,17 @@ def test_run_with_an_unknown_object_fails_clearly(tmp_path) -> None:
 def test_bad_arguments_are_refused(tmp_path) -> None:
     done = humanoid(tmp_path, "run", "say hi", "--seed", "-2")
     assert done.returncode == 2 and "--seed must be >= 0" in done.stderr
+
+
+def test_bench_walk_writes_its_figures_as_json(tmp_path) -> None:
+    out = tmp_path / "walk.json"
+    done = humanoid(tmp_path, "bench", "walk", "--scripts", "2", "--script-duration", "8",
+                    "--realtime-duration", "3", "--output", str(out))  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    result = json.loads(out.read_text())
+    assert result["scripts"] == 2 and len(result["trials"]) == 2
+    for key in ("falls", "tracking_error_mean", "lateral_drift_m_per_m_mean", "max_tilt_deg"):
+        assert key in result
+    assert all(len(t["script"]) >= 1 for t in result["trials"])
+    realtime = result["realtime"]
+    assert realtime["tick_p99_ms"] > 0 and realtime["rtf"] > 0.5 and realtime["walked_m"] > 0.05

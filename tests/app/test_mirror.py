@@ -62,3 +62,31 @@ def test_light_profile_is_a_much_lighter_scene_of_the_same_robot(make_worker) ->
     assert robot_triangles(light) * 50 < robot_triangles(full)
     assert planes(full) == 1 and planes(light) == 0  # no infinite grid to shade
     assert light.nbody == full.nbody and light.nq == full.nq  # the same qpos drives both
+
+
+def test_mirror_draws_the_planned_footsteps_com_and_zmp_and_clears_them(make_worker) -> None:
+    from robot.interface import Footprint, LocomotionState
+
+    port = MovablePort(make_worker(realtime=False))
+    walking = LocomotionState(
+        phase="walking", posture="stand", command=(0.1, 0.0, 0.0), velocity=(0.1, 0.0, 0.0),
+        estimated_pose=(0.0, 0.0, 0.0),
+        footsteps=(Footprint("left", 0.05, 0.05, 0.0), Footprint("right", 0.1, -0.05, 0.1)),
+        com=(0.02, 0.0, 0.23), zmp=(0.03, 0.01), support="left",
+    )  # fmt: skip
+    port.snapshot = dataclasses.replace(port.snapshot, locomotion=walking)
+    mirror = SceneMirror(port, "127.0.0.1", free_port())
+    try:
+        assert mirror.update_once()
+        steps = [h for h in mirror.gait._steps if h.visible]
+        assert [tuple(np.round(h.position, 3)) for h in steps] == [(0.05, 0.05, 0.003), (0.1, -0.05, 0.003)]
+        assert tuple(steps[1].color) != tuple(steps[0].color)  # left and right are told apart
+        assert mirror.gait._com.visible and tuple(mirror.gait._com.position) == (0.02, 0.0, 0.23)
+        assert mirror.gait._zmp.visible
+        # the walk ends while the robot stands still: the overlay goes away
+        standing = dataclasses.replace(walking, phase="standing", footsteps=(), com=None, zmp=None)
+        port.snapshot = dataclasses.replace(port.snapshot, locomotion=standing)
+        mirror.update_once()
+        assert not any(h.visible for h in mirror.gait._steps) and not mirror.gait._com.visible
+    finally:
+        mirror.stop()

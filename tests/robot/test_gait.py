@@ -49,6 +49,17 @@ def test_footsteps_advance_in_the_commanded_direction(model_path, command, axis,
     assert np.all(np.abs(np.diff(np.array(lefts)[:, other])) < 1e-3)  # no drift on the other axis
 
 
+@pytest.mark.parametrize(
+    ("command", "leading"),
+    [(StepCommand(dy=0.02), "left"), (StepCommand(dy=-0.02), "right"), (StepCommand(dtheta=-0.2), "right")],
+)
+def test_the_foot_on_the_side_of_the_motion_steps_first(model_path, command, leading) -> None:
+    """Stepping right with the left foot first would cross it over the right one (the feet collided)."""
+    segment = GaitPlannerCore(model_path, DT).start(command, 0.0)
+    first_single_support = int(segment.support[segment.support > 0][0])
+    assert {1: "right", 2: "left"}[first_single_support] == leading  # support on one foot: the other one flies
+
+
 def test_turning_rotates_the_footsteps(model_path) -> None:
     core = GaitPlannerCore(model_path, DT)
     segment = core.start(StepCommand(dtheta=0.15), 0.0)
