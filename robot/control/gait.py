@@ -195,6 +195,11 @@ class GaitPlannerCore:
     def reset_standing(self) -> None:
         """Put the planner's robot in the standing pose at the origin (the start of every walk)."""
         p = self.parameters
+        for name, value in humanoid_v1.stand_posture().items():  # exactly as at start-up (see WholeBodyIK)
+            self.robot.set_joint(name, value)
+        self.robot.set_T_world_fbase(np.eye(4))
+        self.robot.set_T_world_support(np.eye(4))
+        self.robot.support_is_both = True
         self._tasks.reach_initial_pose(np.eye(4), p.feet_spacing, p.walk_com_height, p.walk_trunk_pitch)
         # Fresh generators: placo's keep state from the previous plan, which would bend the next start.
         self._footsteps = placo.FootstepsPlannerRepetitive(p)

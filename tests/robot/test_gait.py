@@ -141,3 +141,20 @@ def test_walking_controller_walks_the_kinematic_model_and_stops(model_path) -> N
             break
     assert walk.phase == WalkPhase.STANDING
     assert walk.view() is None  # nothing planned ahead while standing
+
+
+def test_a_walk_after_a_turning_walk_starts_exactly_like_a_first_walk(model_path) -> None:
+    """placo keeps the last support frame between walks; it jerked the hips at the next start (falls)."""
+    history = [StepCommand(dtheta=-0.14)] * 500 + [StepCommand()] * 330
+    restart = [StepCommand(dy=-0.014 * min(1.0, (k + 1) / 15)) for k in range(90)]
+
+    def targets(commands: list[StepCommand]) -> np.ndarray:
+        walk = WalkingController(InlineGaitPlanner(model_path, DT), WholeBodyIK(model_path, DT), DT)
+        out = []
+        for command in commands:
+            walk.set_step_command(command)
+            out.append(walk.update())
+        assert walk.phase == WalkPhase.WALKING
+        return np.array(out[-len(restart) + 10 :])
+
+    assert np.allclose(targets(history + restart), targets(restart), atol=1e-4)
