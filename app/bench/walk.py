@@ -30,6 +30,8 @@ def run_walk(
     upright = [t for t in trials if not t["fell"]]
     errors = [t["tracking_error"] for t in upright if t["tracking_error"] is not None]
     drifts = [d for t in upright for d in t["lateral_drift_m_per_m"]]
+    drifts_vs_command = [d for t in upright for d in t["lateral_drift_vs_command_m_per_m"]]
+    drifts_from_standing = [d for t in upright for d in t["lateral_drift_from_standing_m_per_m"]]
     return {
         "suite": "walk",
         "scripts": scripts,
@@ -39,6 +41,13 @@ def run_walk(
         "tracking_error_max": float(np.max(errors)) if errors else None,
         "lateral_drift_m_per_m_mean": float(np.mean(drifts)) if drifts else None,
         "lateral_drift_m_per_m_max": float(np.max(drifts)) if drifts else None,
+        # against the commanded line rather than the heading the robot had: includes heading lag left by turns
+        "lateral_drift_vs_command_m_per_m_mean": float(np.mean(drifts_vs_command)) if drifts_vs_command else None,
+        # straight walks started from standing (no heading lag inherited from a previous turn)
+        "lateral_drift_from_standing_m_per_m_mean": float(np.mean(drifts_from_standing))
+        if drifts_from_standing
+        else None,
+        "lateral_drift_from_standing_samples": len(drifts_from_standing),
         "controller_tick_p50_ms_in_pool": float(np.median([t["tick_p50_ms"] for t in trials])),
         "controller_tick_p99_ms_in_pool": float(np.max([t["tick_p99_ms"] for t in trials])),
         "realtime": realtime_walk_tick(realtime_s),

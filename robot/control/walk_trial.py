@@ -72,6 +72,8 @@ class TrialResult:
     lateral_drift_m_per_m: list[float] = field(default_factory=list)
     tick_ms: list[float] = field(default_factory=list)
     max_tilt_deg: float = 0.0
+    lateral_drift_vs_command_m_per_m: list[float] = field(default_factory=list)
+    lateral_drift_from_standing_m_per_m: list[float] = field(default_factory=list)
 
     @property
     def tracking_error(self) -> float:
@@ -107,12 +109,20 @@ def run_trial(
     prev_yaw = m.yaw_rad
     distance = 0.0
     drifts: list[float] = []
+    drifts_vs_command: list[float] = []  # the same, against the commanded line (heading lag from turns counts)
+    # straight walks started from standing, against the heading it stood with (no sway, no lag inherited)
+    drifts_from_standing: list[float] = []
+    off_command_start = 0.0
     t = 0.0
+    previous = Velocity()
     for duration, velocity in timeline:
+        from_standing = previous == Velocity()
+        previous = velocity
         loco.set_velocity(velocity)
         line: Pose2D | None = None  # the straight line the robot is pointed along, once settled into the segment
         heading = np.zeros(2)
         distance_start = 0.0
+        standing_line, standing_distance = true_pose(backend.read()), distance  # exact heading: no step sway
         for i in range(round(duration / DT)):
             if i >= int(HEADING_WINDOW_S / DT) and line is None:  # heading sways +-3 deg a step: average it
                 yaw = true_pose(backend.read()).yaw
@@ -120,6 +130,7 @@ def run_trial(
             if i == int(DRIFT_SETTLE_S / DT):  # the lag behind the previous segment's motion has resolved by now
                 here = true_pose(backend.read())
                 line, distance_start = Pose2D(here.x, here.y, math.atan2(heading[1], heading[0])), distance
+                off_command_start = _lateral_offset(here, ref)
             m = backend.read()
             planner = loco.walking.planner
             planner.last_wait_ms = 0.0
@@ -145,15 +156,22 @@ def run_trial(
             if m.fallen:
                 loco.halt()
                 nan = float("nan")
-                return TrialResult(True, t, distance, nan, nan, commanded_yaw, drifts, ticks, max_tilt)
+                return TrialResult(True, t, distance, nan, nan, commanded_yaw, drifts, ticks, max_tilt,
+                                   drifts_vs_command, drifts_from_standing)  # fmt: skip
         travelled = distance - distance_start
         if line is not None and velocity.vy == 0.0 and velocity.yaw_rate == 0.0 and travelled > 0.2:
             # sideways departure from the line the robot was pointed along, per metre commanded
-            drifts.append(abs(_lateral_offset(true_pose(backend.read()), line)) / travelled)
+            end_pose = true_pose(backend.read())
+            drifts.append(abs(_lateral_offset(end_pose, line)) / travelled)
+            drifts_vs_command.append(abs(_lateral_offset(end_pose, ref) - off_command_start) / travelled)
+            if from_standing:
+                along = distance - standing_distance
+                drifts_from_standing.append(abs(_lateral_offset(end_pose, standing_line)) / along)
     end = true_pose(backend.read())
     error = math.hypot(end.x - ref.x, end.y - ref.y)
     yaw_error = (start.yaw + yaw_total) - ref.yaw
-    return TrialResult(False, None, distance, error, yaw_error, commanded_yaw, drifts, ticks, max_tilt)
+    return TrialResult(False, None, distance, error, yaw_error, commanded_yaw, drifts, ticks, max_tilt,
+                       drifts_vs_command, drifts_from_standing)  # fmt: skip
 
 
 def _lateral_offset(actual: Pose2D, reference: Pose2D) -> float:
@@ -182,6 +200,8 @@ def trial_in_new_sim(seed: int, duration_s: float, pose_loop: bool = True, plann
         "yaw_error_rad": result.yaw_error_rad,
         "tracking_error": result.tracking_error if not result.fell else None,
         "lateral_drift_m_per_m": result.lateral_drift_m_per_m,
+        "lateral_drift_vs_command_m_per_m": result.lateral_drift_vs_command_m_per_m,
+        "lateral_drift_from_standing_m_per_m": result.lateral_drift_from_standing_m_per_m,
         "max_tilt_deg": result.max_tilt_deg,
         "tick_p50_ms": float(np.percentile(result.tick_ms, 50)),
         "tick_p99_ms": float(np.percentile(result.tick_ms, 99)),

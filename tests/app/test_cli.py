@@ -53,7 +53,8 @@ def test_bench_walk_writes_its_figures_as_json(tmp_path) -> None:
     assert done.returncode == 0, done.stderr
     result = json.loads(out.read_text())
     assert result["scripts"] == 2 and len(result["trials"]) == 2
-    for key in ("falls", "tracking_error_mean", "lateral_drift_m_per_m_mean", "max_tilt_deg"):
+    keys = ("falls", "tracking_error_mean", "lateral_drift_m_per_m_mean", "lateral_drift_from_standing_m_per_m_mean")
+    for key in (*keys, "max_tilt_deg"):
         assert key in result
     assert all(len(t["script"]) >= 1 for t in result["trials"])
     realtime = result["realtime"]
