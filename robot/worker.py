@@ -136,6 +136,7 @@ class RobotWorker:
         self._teleop_active = False
         self._teleop_velocity = Velocity()
         self._teleop_deadline: float | None = None
+        self._stop_promptly = False  # operator let go: stop without first walking off the pose loop's lag
         self._reset_pending = False
 
         self._jobs: queue.Queue[_Job | None] = queue.Queue()
@@ -457,6 +458,7 @@ class RobotWorker:
         with self._lock:
             active = self._teleop_active
             self._teleop_velocity, self._teleop_deadline = Velocity(), None
+            self._stop_promptly = active
         if active:
             self._bus.publish("teleop/stop", f"teleop {how} ({source}): stopping", source=source)
         return CommandReply(True, "stopping" if active else "teleop is not active")
@@ -619,9 +621,10 @@ class RobotWorker:
         with self._lock:
             if self._teleop_deadline is not None and self._clock() > self._teleop_deadline:
                 self._teleop_velocity, self._teleop_deadline = Velocity(), None
-                deadman = True
+                deadman = self._stop_promptly = True
             else:
                 deadman = False
+            promptly, self._stop_promptly = self._stop_promptly, False
             fallen = self._fallen
             velocity = self._teleop_velocity if not self._estop_latched else Velocity()
             in_stance = self._posture_name == Posture.STAND and self._posture.settled
@@ -631,6 +634,8 @@ class RobotWorker:
         if fallen or not in_stance:
             return self._posture.update(self.dt)
         self._loco.set_velocity(velocity)
+        if promptly:
+            self._loco.stop(promptly=True)
         targets = self._loco.update(sensors(measured), self._posture.goal)
         if not self._loco.moving:
             self._posture.hold(self._stand)

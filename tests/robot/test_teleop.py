@@ -54,7 +54,8 @@ def test_teleop_walks_forward_and_the_deadman_stops_it(make_worker) -> None:
     # input stops: within 300 ms the deadman stops the walk, then the robot stands and teleop ends
     deadman = wait_event(events, "teleop/deadman", timeout=2.0)
     assert 0.3 <= deadman.wall_time_s - last_input < 0.35
-    wait_event(events, "teleop/ended", timeout=5.0)
+    ended = wait_event(events, "teleop/ended", timeout=5.0)
+    assert ended.wall_time_s - deadman.wall_time_s < 3.0  # decelerate, two steps in place, stand: no walking on
     assert worker.wait_for(lambda s: s.mode == Mode.IDLE, 1.0)
     state = worker.state()
     assert state.mode == Mode.IDLE and state.locomotion.phase == "standing" and not state.fallen
