@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import placo
 
-from robot.control.gait import COM_HEIGHT_M, FEET_SPACING_M, GaitSegment, load_placo_robot
+from robot.control.gait import COM_HEIGHT_M, FEET_SPACING_M, GaitSegment, load_placo_robot, put_at_walk_start
 from robot.model import humanoid_v1
 
 _SIDE_NAMES = {1: "left", 2: "right"}
@@ -40,19 +40,8 @@ class WholeBodyIK:
         self.upper_body.set_joints({n: posture[n] for n in UPPER_BODY_JOINTS})
 
     def reset_standing(self) -> np.ndarray:
-        """Standing pose at the origin of the planner's frame (where every walk starts); returns its targets.
-
-        The model is first put back exactly as at start-up (standing posture, base and support frame at the
-        origin, support on both feet). After a walk placo keeps the last support frame, and the first re-anchoring
-        on a support foot in the next walk then jerked the hip rolls by 0.3 rad in 0.1 s: most falls in the walk
-        benchmark were 1-2 s into a walk started from standing after earlier walks.
-        """
-        for name, value in humanoid_v1.stand_posture().items():
-            self.robot.set_joint(name, value)
-        self.robot.set_T_world_fbase(np.eye(4))
-        self.robot.set_T_world_support(np.eye(4))
-        self.robot.support_is_both = True
-        self.robot.update_kinematics()
+        """Standing pose at the origin of the planner's frame (where every walk starts); returns its targets."""
+        put_at_walk_start(self.robot)
         self.tasks.reach_initial_pose(np.eye(4), FEET_SPACING_M, COM_HEIGHT_M, 0.0)
         return self.joint_targets()
 
