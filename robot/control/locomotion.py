@@ -130,7 +130,6 @@ class LocomotionController:
         self._pose_loop = PoseLoop(gait_limits, MAX_STEP_BACKWARD_M / s)
         self._use_pose_loop = pose_loop
         self.dt = dt
-        self.walk_velocity = WalkVelocity(0.0, 0.0, 0.0)  # what the gait was last asked for (after the pose loop)
 
     @property
     def stand_targets(self) -> np.ndarray:
@@ -162,7 +161,6 @@ class LocomotionController:
         self.velocity.set_target(Velocity())
         self.velocity.current = Velocity()
         self.walking.abort()
-        self.walk_velocity = WalkVelocity(0.0, 0.0, 0.0)
 
     def reset_odometry(self, pose: Pose2D, sensors: LegSensors) -> None:
         self.odometry.reset(pose, sensors.joint_positions, sensors.imu_quat)
@@ -176,7 +174,6 @@ class LocomotionController:
         if self._use_pose_loop:
             stepping = self.walking.stepped and self.walking.phase in (WalkPhase.WALKING, WalkPhase.STOPPING)
             command = self._pose_loop.update(command, estimate, self.dt, stepping)
-        self.walk_velocity = command
         s = SINGLE_SUPPORT_S
         self.walking.set_step_command(StepCommand(command.vx * s, command.vy * s, command.yaw_rate * s))
         targets = self.walking.update()

@@ -50,8 +50,6 @@ class GaitView:
     com: tuple[float, float, float]
     zmp: tuple[float, float]
     support_foot: str  # "left" | "right" | "both"
-    planned_left: np.ndarray  # (4, 4) planned foot poses now (planner frame), to relate it to the world
-    planned_right: np.ndarray
 
 
 def _is_still(c: StepCommand) -> bool:
@@ -71,7 +69,6 @@ class WalkingController:
         self._pending_at: float | None = None
         self._last_request = 0.0
         self._targets = self.ready_targets.copy()
-        self.last_plan_ms = 0.0
         self.stepped = False  # a foot has left the ground since this walk started
 
     @property
@@ -105,7 +102,6 @@ class WalkingController:
             segment = self.planner.result(block=True)
             assert segment is not None
             self._segment = segment
-            self.last_plan_ms = segment.plan_ms
             self._pending_at = None
             if self.phase == WalkPhase.STARTING:
                 self.phase = WalkPhase.WALKING
@@ -142,8 +138,7 @@ class WalkingController:
         support = {0: "both", 1: "left", 2: "right"}[int(segment.support[i])]
         com = segment.com[i]
         return GaitView(self.phase, tuple(segment.footsteps), (float(com[0]), float(com[1]), float(com[2])),
-                        (float(segment.zmp[i, 0]), float(segment.zmp[i, 1])), support, segment.left[i].copy(),
-                        segment.right[i].copy())  # fmt: skip
+                        (float(segment.zmp[i, 0]), float(segment.zmp[i, 1])), support)  # fmt: skip
 
     def _request(self, kind: str, at: float) -> None:
         self.planner.request(kind, self._command, at)
