@@ -112,7 +112,7 @@ def build_parser() -> argparse.ArgumentParser:
     db_sub.add_parser("upgrade", help="apply pending migrations").set_defaults(func=_db)
 
     bench = sub.add_parser("bench", help="benchmarks, written as JSON")
-    bench.add_argument("suite", choices=["core", "walk"])
+    bench.add_argument("suite", choices=["core", "walk", "perception"])
     bench.add_argument("--json", action="store_true", help="print the JSON result")
     bench.add_argument("--output", default=None, help="also write the JSON result to this file")
     bench.add_argument("--presses", type=int, default=100, help="e-stop presses to time")
@@ -122,9 +122,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     bench.add_argument("--scripts", type=int, default=20, help="walk: random velocity scripts to run")
     bench.add_argument("--script-duration", type=float, default=60.0, help="walk: seconds per script")
-    bench.add_argument("--seed", type=int, default=0, help="walk: seed of the first script")
+    bench.add_argument("--seed", type=int, default=0, help="walk, perception: first seed")
     bench.add_argument("--realtime-duration", type=float, default=30.0,
-                       help="walk: seconds of real-time walking for the control tick figures")  # fmt: skip
+                       help="walk, perception: seconds of real-time walking for the tick and rate figures")  # fmt: skip
+    bench.add_argument("--seeds", type=int, default=50, help="perception: worlds to place the robot in")
+    bench.add_argument("--views", type=int, default=6, help="perception: viewpoints per world")
+    bench.add_argument("--tours", type=int, default=3, help="perception: mapping tours (one world each)")
     bench.set_defaults(func=_bench)
     return parser
 

@@ -16,6 +16,7 @@ import numpy as np
 import viser
 from mjviser.scene import ViserMujocoScene
 
+from app.perception_overlay import PerceptionOverlay
 from robot.interface import LocomotionState, RobotPort
 from robot.model import humanoid_v1
 
@@ -151,6 +152,7 @@ class SceneMirror:
             self.server.scene.add_light_hemisphere("/hemisphere", sky_color=(255, 255, 255),
                                                    ground_color=(120, 110, 100), intensity=1.6)  # fmt: skip
         self.gait = GaitOverlay(self.server)
+        self.perception = PerceptionOverlay(self.server)
         self.updates = 0
         self._last_qpos: np.ndarray | None = None
         self._stop = threading.Event()
@@ -176,12 +178,16 @@ class SceneMirror:
         still make every browser re-render the scene in software, which costs whole CPU cores.
         """
         state = self._port.state()
+        feed = self._port.sensor_feed()
+        perceived = self.perception.update(feed.scan, feed.map, state.perception)
         qpos = np.asarray(state.qpos)
         if self._last_qpos is not None and np.max(np.abs(qpos - self._last_qpos)) < VISIBLE_CHANGE:
             if self.gait.shown and (state.locomotion is None or state.locomotion.com is None):
                 self.gait.update(None)  # the walk ended while the robot stood still: clear its overlay
+                perceived = True
+            if perceived:
                 self.server.flush()
-            return False
+            return perceived
         self._last_qpos = qpos
         self.data.qpos[:] = qpos
         mujoco.mj_kinematics(self.model, self.data)

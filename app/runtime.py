@@ -37,9 +37,14 @@ class Runtime:
         db = make_session_factory(engine)
         if worker is None:
             worker = (
-                WorkerProcess(settings.seed, control_hz=settings.control_hz)
+                WorkerProcess(settings.seed, control_hz=settings.control_hz, perception=settings.perception)
                 if settings.worker_process
-                else RobotWorker(generate_world(settings.seed), realtime=True, control_hz=settings.control_hz)
+                else RobotWorker(
+                    generate_world(settings.seed),
+                    realtime=True,
+                    control_hz=settings.control_hz,
+                    perception=settings.perception,
+                )
             )
         worker.start()
         recorder = SessionRecorder(db, worker, kind="serve", seed=settings.seed, backend=settings.backend,

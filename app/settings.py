@@ -38,6 +38,7 @@ class Settings(BaseSettings):
     )
     mirror_shadows: bool = Field(False, description="shadows in the 3D view (costly where WebGL runs in software)")
     worker_process: bool = Field(True, description="run the robot worker in its own process (keeps its loop on time)")
+    perception: bool = Field(True, description="head camera, detection, lidar and map (about 25 % of one core)")
 
 
 @lru_cache

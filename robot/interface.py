@@ -246,6 +246,95 @@ class LocomotionState:
     com: tuple[float, float, float] | None = None
     zmp: tuple[float, float] | None = None
     support: str = "both"
+    estimated_trunk: tuple[float, ...] = ()  # x, y, z, qw, qx, qy, qz: the whole trunk pose the estimate holds
+
+
+@dataclass(frozen=True)
+class DetectedObject:
+    """A known object found in a camera frame, with where it is in the world (centre of its base)."""
+
+    label: str
+    confidence: float
+    position: tuple[float, float, float]
+    box: tuple[int, int, int, int]  # pixels x0, y0, x1, y1 in the frame it was found in
+    distance_m: float
+
+
+@dataclass(frozen=True)
+class KnownObject:
+    """World memory: where an object was last seen, and on which place."""
+
+    name: str
+    position: tuple[float, float, float]
+    place: str | None
+    seen_sim_s: float
+    confidence: float
+
+
+@dataclass(frozen=True)
+class PerceptionState:
+    """Sensor rates and what perception currently believes; the images, scans and map are in `SensorFeed`."""
+
+    status: str  # "starting" | "ok" | "error: ..."
+    camera_hz: float = 0.0
+    lidar_hz: float = 0.0
+    frame_ms: float = 0.0  # render + detect + encode time of the last frame
+    frame_seq: int = 0
+    frame_sim_s: float = 0.0
+    detections: tuple[DetectedObject, ...] = ()  # in the latest frame
+    known_objects: tuple[KnownObject, ...] = ()
+    head: tuple[float, float] = (0.0, 0.0)  # commanded pan, tilt (rad)
+    map_scans: int = 0
+    # scan matching's correction of the leg odometry (x, y, yaw), as ROS's map -> odom transform, and the trunk's
+    # pose in the map with it applied: what navigation steers by
+    correction: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    pose: tuple[float, float, float] | None = None
+
+
+@dataclass(frozen=True)
+class CameraImage:
+    seq: int
+    sim_time_s: float
+    width: int
+    height: int
+    jpeg: bytes
+    detections: tuple[DetectedObject, ...]
+
+
+@dataclass(frozen=True)
+class ScanView:
+    """A lidar scan as ROS sensor_msgs/LaserScan, with the estimated sensor pose it was taken from."""
+
+    sim_time_s: float
+    pose: tuple[float, float, float]  # x, y, yaw (world)
+    height_m: float
+    angle_min: float
+    angle_increment: float
+    range_max: float
+    ranges: tuple[float, ...]  # inf where nothing was hit
+
+
+@dataclass(frozen=True)
+class OccupancyMap:
+    """As ROS nav_msgs/OccupancyGrid: `data[j * width + i]` is cell (i along x, j along y), 0-100 or -1 unknown;
+    cell (0, 0)'s corner is at `origin`."""
+
+    sim_time_s: float
+    resolution: float
+    origin: tuple[float, float]
+    width: int
+    height: int
+    data: bytes  # int8
+    scans: int
+
+
+@dataclass(frozen=True)
+class SensorFeed:
+    """The latest heavy sensor products (each updated at its own rate; None until the first one)."""
+
+    camera: CameraImage | None = None
+    scan: ScanView | None = None
+    map: OccupancyMap | None = None
 
 
 @dataclass(frozen=True)
@@ -266,6 +355,7 @@ class RobotState:
     plan: PlanStatus | None
     control: ControlStats
     locomotion: LocomotionState | None = None
+    perception: PerceptionState | None = None
 
 
 @dataclass(frozen=True)
@@ -323,3 +413,5 @@ class RobotPort(Protocol):
     def recent_events(self) -> list[Event]: ...
 
     def describe(self) -> RobotDescription: ...
+
+    def sensor_feed(self) -> SensorFeed: ...

@@ -7,7 +7,7 @@ loop only shares the lock with the robot's own threads.
 Wire protocol over one duplex pipe (pickled tuples):
   parent -> child: ("cmd", id, Command) | ("stop",)
   child -> parent: ("ready", RobotDescription, RobotState) | ("reply", id, CommandReply) | ("state", RobotState)
-                   | ("event", Event) | ("fatal", str)
+                   | ("event", Event) | ("feed", SensorFeed: only the parts that changed) | ("fatal", str)
 """
 
 from __future__ import annotations
@@ -36,6 +36,7 @@ from robot.interface import (
     ResetRobot,
     RobotDescription,
     RobotState,
+    SensorFeed,
     SetPosture,
     StopTeleop,
     Teleop,
@@ -54,8 +55,9 @@ _IMMEDIATE = (EStop, ReleaseEStop, CancelPlan, Teleop, StopTeleop, SetPosture, R
 class WorkerProcess:
     """Parent-side proxy of a `RobotWorker` running in a child process."""
 
-    def __init__(self, seed: int, control_hz: float = 100.0, realtime: bool = True) -> None:
+    def __init__(self, seed: int, control_hz: float = 100.0, realtime: bool = True, perception: bool = True) -> None:
         self._seed = seed
+        self._perception = perception
         self._control_hz = control_hz
         self._realtime = realtime
         self._bus = EventBus()
@@ -64,6 +66,7 @@ class WorkerProcess:
         self._pending_lock = threading.Lock()
         self._send_lock = threading.Lock()
         self._board = StateBoard()
+        self._feed = SensorFeed()
         self._description: RobotDescription | None = None
         self._process: mp.process.BaseProcess | None = None
         self._conn: Connection | None = None
@@ -77,7 +80,7 @@ class WorkerProcess:
         parent_conn, child_conn = context.Pipe(duplex=True)
         self._process = context.Process(
             target=child_main,
-            args=(child_conn, self._seed, self._control_hz, self._realtime),
+            args=(child_conn, self._seed, self._control_hz, self._realtime, self._perception),
             name="robot-worker",
             daemon=True,
         )
@@ -153,6 +156,9 @@ class WorkerProcess:
         assert self._description is not None, "start() first"
         return self._description
 
+    def sensor_feed(self) -> SensorFeed:
+        return self._feed
+
     def wait_for(self, predicate: Callable[[RobotState], bool], timeout_s: float) -> bool:
         return self._board.wait_for(predicate, timeout_s)
 
@@ -170,6 +176,13 @@ class WorkerProcess:
                 self._board.publish(message[1])
             elif kind == "event":
                 self._bus.forward(message[1])
+            elif kind == "feed":
+                changed: SensorFeed = message[1]
+                self._feed = SensorFeed(
+                    camera=changed.camera or self._feed.camera,
+                    scan=changed.scan or self._feed.scan,
+                    map=changed.map or self._feed.map,
+                )
             elif kind == "reply":
                 with self._pending_lock:
                     future = self._pending.get(message[1])
@@ -186,13 +199,13 @@ class WorkerProcess:
 # child process
 
 
-def child_main(conn: Connection, seed: int, control_hz: float, realtime: bool) -> None:
+def child_main(conn: Connection, seed: int, control_hz: float, realtime: bool, perception: bool = True) -> None:
     """Entry point of the worker process: build the robot, then serve commands until told to stop."""
     try:
         from robot.model.world import generate_world
         from robot.worker import RobotWorker
 
-        worker = RobotWorker(generate_world(seed), realtime=realtime, control_hz=control_hz)
+        worker = RobotWorker(generate_world(seed), realtime=realtime, control_hz=control_hz, perception=perception)
         subscription = worker.subscribe()
         description = worker.describe()
         if realtime:  # every thread started from here on inherits it; the control loop goes higher still
@@ -244,6 +257,7 @@ def child_main(conn: Connection, seed: int, control_hz: float, realtime: bool) -
 
 def _forward_state_and_events(worker: Any, subscription: Subscription, send: Any, stop: threading.Event) -> None:
     last_state = None
+    last_feed = SensorFeed()
     while not stop.is_set():
         event = subscription.get(timeout=STATE_PERIOD_S)
         try:
@@ -254,5 +268,23 @@ def _forward_state_and_events(worker: Any, subscription: Subscription, send: Any
             if state is not last_state:
                 send(("state", state))
                 last_state = state
+            feed = worker.sensor_feed()
+            if feed is not last_feed:  # images and maps cross only when new, and only the new parts
+                send(
+                    (
+                        "feed",
+                        SensorFeed(
+                            *(
+                                new if new is not old else None
+                                for new, old in (
+                                    (feed.camera, last_feed.camera),
+                                    (feed.scan, last_feed.scan),
+                                    (feed.map, last_feed.map),
+                                )
+                            )
+                        ),
+                    )
+                )
+                last_feed = feed
         except (OSError, BrokenPipeError):
             return

@@ -10,6 +10,7 @@
 
 from __future__ import annotations
 
+import math
 import queue
 import shutil
 import tempfile
@@ -22,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from robot.control.head import HeadController
 from robot.control.locomotion import LocomotionController, Velocity, clip_velocity
 from robot.control.posture import PostureController
 from robot.control.priority import raise_thread_priority
@@ -32,6 +34,7 @@ from robot.interface import (
     CancelPlan,
     Command,
     CommandReply,
+    DetectedObject,
     EStop,
     Event,
     ExecutePlan,
@@ -40,6 +43,7 @@ from robot.interface import (
     LocomotionState,
     Mode,
     ObjectPose,
+    PerceptionState,
     Plan,
     PlanState,
     PlanStatus,
@@ -51,6 +55,7 @@ from robot.interface import (
     RobotDescription,
     RobotState,
     RunCommand,
+    SensorFeed,
     SetPosture,
     StepState,
     StepStatus,
@@ -60,7 +65,18 @@ from robot.interface import (
 from robot.model import humanoid_v1
 from robot.model.scene import scene_xml
 from robot.model.world import WorldLayout
-from robot.planning.executor import Cancelled, Capability, ExecutionContext, PlanExecutor, default_capabilities
+from robot.perception.geometry import matrix_to_quat_wxyz, yaw_of
+from robot.perception.search import ObjectNotFound, find_object
+from robot.perception.sensor_process import SensorError
+from robot.perception.service import PerceptionService
+from robot.planning.executor import (
+    Cancelled,
+    Capability,
+    ExecutionContext,
+    PlanExecutor,
+    StepFailed,
+    default_capabilities,
+)
 from robot.planning.planner import Planner, PlanningError
 from robot.planning.rules import RulesPlanner
 from robot.planning.validator import validate_plan, validate_plan_json
@@ -73,6 +89,11 @@ MAX_COMMAND_CHARS = 500
 MAX_TICKS_BEHIND = 5
 # Deadman: teleop motion stops when no teleop command has arrived for this long (s).
 TELEOP_TIMEOUT_S = 0.3
+# Turning in place for a task (looking for an object, facing a point).
+TURN_RATE_RAD_S = 0.5
+TURN_TOLERANCE_RAD = 0.12
+# After the head reaches its target, the image is steady after this long (s).
+HEAD_SETTLE_S = 0.15
 
 
 def _step_summary(steps: tuple[StepStatus, ...]) -> list[dict[str, str]]:
@@ -98,6 +119,7 @@ class RobotWorker:
         realtime: bool = True,
         control_hz: float = 100.0,
         locomotion: LocomotionController | None = None,
+        perception: bool = True,
     ) -> None:
         self.layout = layout
         self.backend = backend or MujocoSimBackend(layout)
@@ -105,7 +127,7 @@ class RobotWorker:
         self.realtime = realtime
         self.control_hz = control_hz
         self.dt = 1.0 / control_hz
-        self._executor = PlanExecutor(capabilities or default_capabilities())
+        self._executor = PlanExecutor(capabilities or self._capabilities())
         self._bus = EventBus(sim_clock=lambda: self._sim_time)
         self._stats = LoopStats(control_hz)
         self._model_dir: str | None = None
@@ -138,6 +160,11 @@ class RobotWorker:
         self._teleop_deadline: float | None = None
         self._stop_promptly = False  # operator let go: stop without first walking off the pose loop's lag
         self._reset_pending = False
+        self._head = HeadController(start=(float(self._stand[_HEAD_PAN]), float(self._stand[_HEAD_TILT])))
+        self._task_velocity = Velocity()  # what a running plan step asks the legs for (turning to look)
+        self._perception = (
+            PerceptionService(layout, self._board_latest, self._bus.publish, realtime) if perception else None
+        )
 
         self._jobs: queue.Queue[_Job | None] = queue.Queue()
         self._wake = threading.Event()
@@ -161,6 +188,8 @@ class RobotWorker:
         ]
         for thread in self._threads:
             thread.start()
+        if self._perception is not None:
+            self._perception.start()
         self._bus.publish("worker/started", f"robot worker started ({'real time' if self.realtime else 'headless'})")
 
     def is_alive(self) -> bool:
@@ -176,6 +205,8 @@ class RobotWorker:
         for thread in self._threads:
             thread.join(timeout=5.0)
         self._threads = []
+        if self._perception is not None:
+            self._perception.stop()
         self._loco.walking.planner.close()
         if self._model_dir is not None:
             shutil.rmtree(self._model_dir, ignore_errors=True)
@@ -215,6 +246,9 @@ class RobotWorker:
     def recent_events(self) -> list[Event]:
         return self._bus.history()
 
+    def sensor_feed(self) -> SensorFeed:
+        return self._perception.feed() if self._perception is not None else SensorFeed()
+
     def describe(self) -> RobotDescription:
         if self._description is None:
             self._description = RobotDescription(
@@ -230,7 +264,70 @@ class RobotWorker:
         return self._description
 
     # ----------------------------------------------------------------------------------------------------------
+    # what plan steps can do
+
+    def _capabilities(self) -> dict[str, Capability]:
+        capabilities = default_capabilities()
+        capabilities["detect_object"] = self._detect_object
+        return capabilities
+
+    def _detect_object(self, args: dict[str, str], ctx: ExecutionContext) -> str:
+        """Look for the object (head, then body); found: its 3D position goes into the world memory."""
+        if self._perception is None:
+            raise StepFailed("perception is off in this worker")
+        name = self._world_context().resolve_object(args["object"]) or args["object"]
+        remembered = self._perception.memory.get(name)
+        believed = remembered.position if remembered else self._expected_position(name)
+        try:
+            result = find_object(name, _TaskBody(self, ctx), believed, ctx.check_cancelled)
+        except ObjectNotFound as exc:
+            raise StepFailed(str(exc)) from exc
+        except SensorError as exc:
+            raise StepFailed(f"camera unavailable: {exc}") from exc
+        finally:
+            self._set_task_velocity(Velocity())
+        found = result.detection
+        x, y, z = found.position
+        place = self._perception.memory.place_of(found.position)
+        where = f" on the {place}" if place and place != "floor" else ""
+        self._bus.publish("perception/object_found", f"found the {name} at ({x:.3f}, {y:.3f}, {z:.3f}){where}",
+                          name=name, position=list(found.position), distance_m=found.distance_m,
+                          confidence=found.confidence, views=result.views)  # fmt: skip
+        return f"found {name} at ({x:.3f}, {y:.3f}, {z:.3f}) m, {found.distance_m:.2f} m away{where}"
+
+    def _expected_position(self, name: str) -> tuple[float, float, float] | None:
+        """Where the world model says an object should be: the middle of the place it is on (not where it is)."""
+        place = self._world_context().object_locations.get(name)
+        for p in self.layout.places:
+            if p.name == place and p.surface is not None:
+                return (p.surface.x, p.surface.y, p.surface.height)
+        return None
+
+    def _set_task_velocity(self, velocity: Velocity) -> None:
+        with self._lock:
+            self._task_velocity = velocity
+
+    def _estimated_trunk(self) -> tuple[np.ndarray, np.ndarray]:
+        """The trunk's pose by leg odometry and the IMU (the frame perception is given)."""
+        odometry = self._loco.odometry
+        return odometry.position.copy(), odometry.rotation.copy()
+
+    def _map_trunk(self) -> tuple[np.ndarray, np.ndarray]:
+        """The trunk's pose in the map (odometry corrected by scan matching): the frame of detected objects."""
+        position, rotation = self._estimated_trunk()
+        if self._perception is None:
+            return position, rotation
+        x, y, yaw = self._perception.localise(float(position[0]), float(position[1]), yaw_of(rotation))
+        turn = yaw - yaw_of(rotation)
+        c, s = math.cos(turn), math.sin(turn)
+        about_z = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        return np.array([x, y, position[2]]), about_z @ rotation
+
+    # ----------------------------------------------------------------------------------------------------------
     # helpers for headless runs and tests
+
+    def _board_latest(self) -> RobotState:
+        return self._board.latest()
 
     def wait_for(self, predicate: Callable[[RobotState], bool], timeout_s: float) -> bool:
         """Block until `predicate(state)` holds or the wall-clock timeout passes."""
@@ -261,6 +358,7 @@ class RobotWorker:
             return
         command, received = pending
         self._teleop_velocity, self._teleop_deadline = Velocity(), None
+        self._head.freeze()
         walking = self._loco.moving
         if walking:
             # a biped mid-stride cannot freeze its joints: it finishes the step and puts its feet together
@@ -305,7 +403,8 @@ class RobotWorker:
         return None
 
     def _world_context(self) -> WorldContext:
-        return WorldContext.from_layout(self.layout, held_object=self._held_object)
+        known = self._perception.memory.snapshot() if self._perception is not None else ()
+        return WorldContext.from_layout(self.layout, held_object=self._held_object, known_objects=known)
 
     def _run_command(self, command: RunCommand) -> CommandReply:
         text = command.text.strip()
@@ -500,6 +599,9 @@ class RobotWorker:
             self._held_object = None
             self._posture_name = Posture.STAND
         self._loco.halt()
+        self._head.reset(start=(float(self._stand[_HEAD_PAN]), float(self._stand[_HEAD_TILT])))
+        if self._perception is not None:
+            self._perception.memory.clear()
         self.backend.reset(self._stand)
         self._posture.hold(self._stand)
         self._measured = self.backend.read()
@@ -587,6 +689,8 @@ class RobotWorker:
                         self._apply_pending_estop()
                         self._apply_pending_reset()
                     continue
+            elif self._perception is not None:  # headless: the sensors keep their rate in simulated time
+                self._perception.wait_until_served(self._sim_time)
             started = time.perf_counter()
             try:
                 self._tick()
@@ -605,6 +709,12 @@ class RobotWorker:
         self._apply_pending_estop()
         self._apply_pending_reset()
         self._targets = self._control_targets(self._measured)
+        with self._lock:
+            fallen = self._fallen
+        if not fallen:  # the head is the camera's gimbal, whoever drives the other joints
+            pan, tilt = self._head.update(self.dt)
+            self._targets[_HEAD_PAN] = pan
+            self._targets[_HEAD_TILT] = tilt
         self.backend.write(self._targets)
         self.backend.step(self.dt)
         measured = self.backend.read()
@@ -626,12 +736,17 @@ class RobotWorker:
                 deadman = False
             promptly, self._stop_promptly = self._stop_promptly, False
             fallen = self._fallen
-            velocity = self._teleop_velocity if not self._estop_latched else Velocity()
+            velocity = self._task_velocity if self._current_job is not None else self._teleop_velocity
+            if self._estop_latched:
+                velocity = Velocity()
             in_stance = self._posture_name == Posture.STAND and self._posture.settled
         if deadman:
             self._bus.publish("teleop/deadman", f"no teleop input for {TELEOP_TIMEOUT_S * 1e3:.0f} ms: stopping",
                               Level.WARN)  # fmt: skip
         if fallen or not in_stance:
+            if not fallen:  # crouching or moving between postures: the feet stay put, the estimate follows
+                s = sensors(measured)
+                self._loco.odometry.update(s.joint_positions, s.imu_quat, s.foot_forces)
             return self._posture.update(self.dt)
         self._loco.set_velocity(velocity)
         if promptly:
@@ -693,19 +808,29 @@ class RobotWorker:
                 plan=plan_status,
                 control=self._stats.snapshot(),
                 locomotion=self._locomotion_state(posture),
+                perception=self._perception_state(),
             )
         )
+
+    def _perception_state(self) -> PerceptionState | None:
+        if self._perception is None:
+            return None
+        pose = self._loco.odometry.pose
+        return replace(self._perception.state(), head=self._head.command,
+                       pose=self._perception.localise(pose.x, pose.y, pose.yaw))  # fmt: skip
 
     def _locomotion_state(self, posture: str) -> LocomotionState:
         loco = self._loco
         target, current, pose = loco.velocity.target, loco.velocity.current, loco.odometry.pose
         overlay = loco.overlay()
+        position, rotation = self._estimated_trunk()
         state = LocomotionState(
             phase=loco.phase.value,
             posture=posture,
             command=(target.vx, target.vy, target.yaw_rate),
             velocity=(current.vx, current.vy, current.yaw_rate),
             estimated_pose=(pose.x, pose.y, pose.yaw),
+            estimated_trunk=(*(float(v) for v in position), *matrix_to_quat_wxyz(rotation)),
         )
         if overlay is None:
             return state
@@ -716,6 +841,73 @@ class RobotWorker:
             zmp=overlay.zmp,
             support=overlay.support,
         )
+
+
+_HEAD_PAN = humanoid_v1.JOINT_NAMES.index("head_pan")
+_HEAD_TILT = humanoid_v1.JOINT_NAMES.index("head_tilt")
+
+
+class _TaskBody:
+    """The robot's head and legs as a plan step uses them (the object search's `SearchBody`): each call blocks in
+    simulated time and gives up when the plan is cancelled."""
+
+    def __init__(self, worker: RobotWorker, ctx: ExecutionContext) -> None:
+        self._worker = worker
+        self._ctx = ctx
+
+    def point_head(self, pan: float, tilt: float) -> None:
+        worker = self._worker
+        worker._head.point(pan, tilt)
+        while not worker._head.at_target:
+            self._ctx.wait_sim(0.02)
+        self._ctx.wait_sim(HEAD_SETTLE_S)
+
+    def look_at(self, target: tuple[float, float, float]) -> bool:
+        position, rotation = self._worker._map_trunk()
+        pan, tilt, reachable = self._worker._head.angles_to_look_at(position, rotation, np.asarray(target))
+        if reachable:
+            self.point_head(pan, tilt)
+        return reachable
+
+    def face(self, target: tuple[float, float, float]) -> None:
+        position, rotation = self._worker._map_trunk()
+        heading = math.atan2(target[1] - position[1], target[0] - position[0])
+        self.turn_in_place(_wrap(heading - yaw_of(rotation)))
+
+    def turn_in_place(self, angle: float) -> None:
+        worker = self._worker
+        worker._head.point(0.0, worker._head.target[1])
+        turned, last = 0.0, yaw_of(worker._map_trunk()[1])
+        try:
+            for rate in (TURN_RATE_RAD_S, TURN_RATE_RAD_S / 2):  # a second, slower turn takes up the overshoot
+                remaining = angle - turned
+                if abs(remaining) < TURN_TOLERANCE_RAD:
+                    break
+                direction = math.copysign(1.0, remaining)
+                worker._set_task_velocity(Velocity(0.0, 0.0, direction * rate))
+                # stop early by about what the two stopping steps still turn
+                while direction * (angle - turned) > rate * 0.3:
+                    self._ctx.wait_sim(0.02)
+                    yaw = yaw_of(worker._map_trunk()[1])
+                    turned += _wrap(yaw - last)
+                    last = yaw
+                worker._set_task_velocity(Velocity())
+                while worker._loco.moving:
+                    self._ctx.wait_sim(0.02)
+                yaw = yaw_of(worker._map_trunk()[1])
+                turned += _wrap(yaw - last)
+                last = yaw
+        finally:
+            worker._set_task_velocity(Velocity())
+
+    def fresh_detections(self) -> tuple[DetectedObject, ...]:
+        perception = self._worker._perception
+        assert perception is not None
+        return perception.detections_after(self._worker._sim_time)
+
+
+def _wrap(angle: float) -> float:
+    return math.atan2(math.sin(angle), math.cos(angle))
 
 
 def _crouch_targets() -> np.ndarray:

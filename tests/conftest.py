@@ -30,11 +30,13 @@ def scene_model(layout: WorldLayout) -> mujoco.MjModel:
 
 @pytest.fixture
 def make_worker(layout: WorldLayout, scene_model: mujoco.MjModel) -> Iterator:
-    """Factory of started workers on a fresh simulation of seed 0; all are stopped at teardown."""
+    """Factory of started workers on a fresh simulation of seed 0; all are stopped at teardown. Perception (the
+    camera, lidar and map, a few seconds to start) is off unless a test asks for it."""
     workers: list[RobotWorker] = []
 
-    def make(realtime: bool = True, **kwargs) -> RobotWorker:
-        worker = RobotWorker(layout, backend=MujocoSimBackend(layout, scene_model), realtime=realtime, **kwargs)
+    def make(realtime: bool = True, perception: bool = False, **kwargs) -> RobotWorker:
+        worker = RobotWorker(layout, backend=MujocoSimBackend(layout, scene_model), realtime=realtime,
+                             perception=perception, **kwargs)  # fmt: skip
         worker.start()
         workers.append(worker)
         return worker

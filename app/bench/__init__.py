@@ -18,6 +18,11 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
 
         result = run_walk(scripts=args.scripts, duration_s=args.script_duration, seed=args.seed or 0,
                           realtime_s=args.realtime_duration)  # fmt: skip
+    elif suite == "perception":
+        from app.bench.perception import run_perception
+
+        result = run_perception(seeds=args.seeds, views=args.views, seed=args.seed or 0,
+                                realtime_s=args.realtime_duration, tours=args.tours)  # fmt: skip
     else:  # pragma: no cover - argparse restricts the choices
         raise SystemExit(f"unknown suite {suite}")
     text = json.dumps(result, indent=2)

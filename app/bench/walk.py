@@ -67,7 +67,7 @@ def realtime_walk_tick(duration_s: float = 30.0) -> dict[str, Any]:
     from robot.model.world import open_floor
     from robot.worker import RobotWorker
 
-    worker = RobotWorker(open_floor(), realtime=True)
+    worker = RobotWorker(open_floor(), realtime=True, perception=False)  # the walk alone (see bench perception)
     worker.start()
     try:
         start = worker.state()

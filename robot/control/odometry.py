@@ -75,6 +75,7 @@ class LegOdometry:
         if self._stance is None:
             self._stance = max(_FEET, key=lambda s: load[s])
             self._anchor = self.position + rotation @ feet[self._stance]
+            self._anchor[2] = 0.0
         # where the trunk is now, from the stance foot; a new stance foot is anchored from this same instant
         # (anchoring it from the previous tick's trunk cost a few mm per step, 16 cm over 18 s sideways)
         position = self._anchor - rotation @ feet[self._stance]
@@ -85,6 +86,7 @@ class LegOdometry:
         if (takes_weight and flat) or lifted:
             self._stance = other
             self._anchor = position + rotation @ feet[other]
+            self._anchor[2] = 0.0  # a foot that takes the weight is on the floor (flat floors): height cannot drift
         self.rotation = rotation
         self.position = position
         return self.pose

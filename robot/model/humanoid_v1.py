@@ -58,6 +58,23 @@ WRIST_MASS = 0.08
 WRIST_POS_Y = 0.125
 FOREARM_X = -0.019
 
+# Geom groups: the world is group 0; the robot's own geometry is 1 (gripper), 2 (OP3 meshes) and 3 (OP3 convex
+# collision shapes). Sensors that must not see the robot (the lidar) read group 0 only.
+WORLD_GEOM_GROUP = 0
+GRIPPER_GEOM_GROUP = 1
+
+# Head RGB-D camera, as an Intel RealSense D435i: 640 x 480, 87 deg horizontal field of view, in the face.
+HEAD_CAMERA = "head_rgbd"
+HEAD_CAMERA_BODY = "head_tilt_link"
+CAMERA_WIDTH = 640
+CAMERA_HEIGHT = 480
+CAMERA_HFOV_DEG = 87.0
+CAMERA_POS = (0.035, 0.0, 0.02)  # in the head-tilt link: forward of the tilt axis, at eye height
+# Lidar: a horizontal ring (as one ring of an Ouster OS1-16) from the pelvis, so that its plane (about 0.17 m above
+# the floor when standing) crosses every piece of furniture and obstacle in the apartment.
+LIDAR_SITE = "lidar"
+LIDAR_POS = (0.0, 0.0, -0.10)  # in the trunk (body_link)
+
 
 @dataclass(frozen=True)
 class JointLimit:
@@ -126,10 +143,12 @@ def _add_gripper(spec: mujoco.MjSpec, side: str) -> None:
     wrist.add_joint(name=f"{s}_wrist", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[1, 0, 0])
     # The wrist servo (one XM430) and the palm that carries the gripper servo.
     wrist.add_geom(name=f"{s}_wrist_servo", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.014, 0.012, 0.017],
-                   pos=[0, out * 0.010, 0], mass=WRIST_MASS, rgba=[0.2, 0.2, 0.2, 1])  # fmt: skip
+                   pos=[0, out * 0.010, 0], mass=WRIST_MASS, rgba=[0.2, 0.2, 0.2, 1],
+                   group=GRIPPER_GEOM_GROUP)  # fmt: skip
     palm_y = out * (0.022 + PALM_HALF[1])
     wrist.add_geom(name=f"{s}_palm", type=mujoco.mjtGeom.mjGEOM_BOX, size=list(PALM_HALF),
-                   pos=[0, palm_y, 0], mass=PALM_MASS, rgba=[0.25, 0.25, 0.28, 1])  # fmt: skip
+                   pos=[0, palm_y, 0], mass=PALM_MASS, rgba=[0.25, 0.25, 0.28, 1],
+                   group=GRIPPER_GEOM_GROUP)  # fmt: skip
     finger_y = palm_y + out * (PALM_HALF[1] + FINGER_HALF[1] - 0.006)
     for finger, sign in (("a", 1.0), ("b", -1.0)):
         body = wrist.add_body(name=f"{s}_finger_{finger}", pos=[0, finger_y, 0])
@@ -138,7 +157,7 @@ def _add_gripper(spec: mujoco.MjSpec, side: str) -> None:
                        damping=2.0, armature=0.01)  # fmt: skip
         body.add_geom(name=f"{s}_finger_{finger}_pad", type=mujoco.mjtGeom.mjGEOM_BOX, size=list(FINGER_HALF),
                       pos=[sign * FINGER_HALF[0], 0, 0], mass=FINGER_MASS, friction=list(FINGER_FRICTION),
-                      condim=4, rgba=[0.85, 0.45, 0.1, 1])  # fmt: skip
+                      condim=4, rgba=[0.85, 0.45, 0.1, 1], group=GRIPPER_GEOM_GROUP)  # fmt: skip
     wrist.add_site(name=HAND_FRAMES[side], pos=[0, finger_y + out * 0.006, 0])
     spec.add_equality(type=mujoco.mjtEq.mjEQ_JOINT, name1=f"{s}_grip_mimic", name2=f"{s}_grip")
 
@@ -183,6 +202,17 @@ def _add_sensors(spec: mujoco.MjSpec) -> None:
                             objname=name)  # fmt: skip
 
 
+def _add_perception_sensors(spec: mujoco.MjSpec) -> None:
+    """The head camera (MuJoCo cameras look along their -z, y up: this one looks along the head's +x) and the
+    lidar's mounting point."""
+    vertical_fov = 2.0 * math.degrees(
+        math.atan(math.tan(math.radians(CAMERA_HFOV_DEG / 2.0)) * CAMERA_HEIGHT / CAMERA_WIDTH)
+    )
+    spec.body(HEAD_CAMERA_BODY).add_camera(name=HEAD_CAMERA, pos=list(CAMERA_POS), xyaxes=[0, -1, 0, 0, 0, 1],
+                                           fovy=vertical_fov)  # fmt: skip
+    spec.body(TRUNK_BODY).add_site(name=LIDAR_SITE, pos=list(LIDAR_POS), group=4)
+
+
 def fsr_site_offsets() -> dict[str, list[tuple[float, float]]]:
     """(x, y) of each force pad in its sole frame, in sensor order, for computing the centre of pressure."""
     offsets = [(dx * FOOT_LENGTH / 4, dy * 0.02) for dx, dy in ((1, 1), (1, -1), (-1, 1), (-1, -1))]
@@ -204,6 +234,7 @@ def build_robot_spec() -> mujoco.MjSpec:
         joint.range = [limit.lower, limit.upper]
         joint.limited = mujoco.mjtLimited.mjLIMITED_TRUE
     _add_sensors(spec)
+    _add_perception_sensors(spec)
     return spec
 
 
@@ -231,7 +262,7 @@ def placo_mjcf() -> str:
         body.ipos = b.ipos.tolist()
         body.iquat = b.iquat.tolist()
         body.inertia = b.inertia.tolist()
-    for element in (*spec.sensors, *spec.actuators, *spec.equalities):
+    for element in (*spec.sensors, *spec.actuators, *spec.equalities, *spec.cameras):
         spec.delete(element)
     for site in list(spec.sites):
         name = site.name

@@ -24,6 +24,8 @@ DOORWAY_WIDTH = 0.8
 # Robot footprint radius used to inflate obstacles when checking reachability (m).
 ROBOT_RADIUS = 0.16
 GRID_RESOLUTION = 0.05
+# Obstacles are at least this tall, so the lidar's plane (about 0.17 m up) crosses them (m).
+OBSTACLE_MIN_HEIGHT = 0.2
 # Distance from a surface's front edge to the open-floor staging point in front of it (m).
 STAGING_DISTANCE = ROBOT_RADIUS + 0.1
 
@@ -118,7 +120,8 @@ def _walls() -> tuple[Box, ...]:
 
 KITCHEN_COUNTER = Box("kitchen_counter", 1.75, 0.55, 0.2, 0.7, 0.25, (0.55, 0.42, 0.3, 1.0))
 LIVING_TABLE = Box("living_room_table", -1.2, 0.75, 0.3, 0.25, 0.2, (0.45, 0.3, 0.2, 1.0))
-DOCK_PAD = Box("charging_dock", -1.65, -1.15, 0.15, 0.15, 0.01, (0.2, 0.7, 0.9, 1.0))
+# A charging mat flush with the floor (3 mm): the walking controller does not climb steps.
+DOCK_PAD = Box("charging_dock", -1.65, -1.15, 0.15, 0.15, 0.003, (0.2, 0.7, 0.9, 1.0))
 
 _OBJECT_SPECS = (
     # name, aliases, colour, shape, rgba, mass (kg), radius, height (m)
@@ -170,8 +173,9 @@ def _random_obstacles(rng: np.random.Generator, count: int, keep_clear: list[tup
         hx, hy = rng.uniform(0.06, 0.14, size=2)
         x = rng.uniform(-ROOM_X + hx + 0.05, ROOM_X - hx - 0.05)
         y = rng.uniform(-ROOM_Y + hy + 0.05, ROOM_Y - hy - 0.05)
+        height = float(rng.uniform(OBSTACLE_MIN_HEIGHT, 0.35))
         candidate = Box(names[len(obstacles) % len(names)] + f"_{len(obstacles)}", float(x), float(y), float(hx),
-                        float(hy), float(rng.uniform(0.15, 0.35)), colours[len(obstacles) % len(colours)])  # fmt: skip
+                        float(hy), height, colours[len(obstacles) % len(colours)])  # fmt: skip
         blocked = [KITCHEN_COUNTER, LIVING_TABLE, DOCK_PAD, *obstacles, *_walls()]
         if any(_boxes_overlap(candidate, b, 0.1) for b in blocked):
             continue

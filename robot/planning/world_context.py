@@ -5,6 +5,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
+from robot.interface import KnownObject
 from robot.model.world import WorldLayout
 
 
@@ -19,14 +20,24 @@ class WorldContext:
     objects: dict[str, tuple[str, ...]]
     object_locations: dict[str, str]  # object -> place where it is believed to be
     held_object: str | None = None
+    known_objects: tuple[KnownObject, ...] = ()  # what perception has seen, and where
 
     @staticmethod
-    def from_layout(layout: WorldLayout, held_object: str | None = None) -> WorldContext:
+    def from_layout(
+        layout: WorldLayout, held_object: str | None = None, known_objects: tuple[KnownObject, ...] = ()
+    ) -> WorldContext:
+        """The world as the robot believes it: the layout's places and objects, where perception last saw each
+        object overriding where the layout put it."""
+        locations = {o.name: o.place for o in layout.objects}
+        for known in known_objects:
+            if known.place:
+                locations[known.name] = known.place
         return WorldContext(
             places={p.name: p.aliases for p in layout.places},
             objects={o.name: o.aliases for o in layout.objects},
-            object_locations={o.name: o.place for o in layout.objects},
+            object_locations=locations,
             held_object=held_object,
+            known_objects=known_objects,
         )
 
     def resolve_place(self, name: str) -> str | None:

@@ -161,6 +161,7 @@ function renderState(s) {
   $("st-tick").textContent = `${fmt(s.control.tick_p50_ms, 2)} / ${fmt(s.control.tick_p99_ms, 2)} ms, ${s.control.deadline_misses} missed`;
   $("st-held").textContent = s.held_object || "nothing";
   if (humanoid.renderLocomotion) humanoid.renderLocomotion(s.locomotion);
+  if (humanoid.renderPerception) humanoid.renderPerception(s.perception, s.locomotion);
   renderPlan(s.plan);
 }
 

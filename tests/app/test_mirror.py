@@ -8,6 +8,7 @@ import numpy as np
 
 from app.bench.server import free_port
 from app.mirror import VISIBLE_CHANGE, SceneMirror
+from robot.interface import KnownObject, OccupancyMap, PerceptionState, ScanView, SensorFeed
 
 
 class MovablePort:
@@ -17,12 +18,16 @@ class MovablePort:
         self.worker = worker
         self.snapshot = worker.state()
         self.offset = np.zeros(len(self.snapshot.qpos))
+        self.feed = SensorFeed()
 
     def state(self):
         return dataclasses.replace(self.snapshot, qpos=tuple(np.asarray(self.snapshot.qpos) + self.offset))
 
     def describe(self):
         return self.worker.describe()
+
+    def sensor_feed(self):
+        return self.feed
 
 
 def test_mirror_pushes_visible_motion_only(make_worker) -> None:
@@ -88,5 +93,28 @@ def test_mirror_draws_the_planned_footsteps_com_and_zmp_and_clears_them(make_wor
         port.snapshot = dataclasses.replace(port.snapshot, locomotion=standing)
         mirror.update_once()
         assert not any(h.visible for h in mirror.gait._steps) and not mirror.gait._com.visible
+    finally:
+        mirror.stop()
+
+
+def test_mirror_draws_scan_map_and_seen_objects_and_only_resends_changes(make_worker) -> None:
+    port = MovablePort(make_worker(realtime=False))
+    mirror = SceneMirror(port, "127.0.0.1", free_port())
+    try:
+        mirror.update_once()
+        ranges = tuple([1.0] * 64)
+        scan = ScanView(1.0, (0.0, 0.0, 0.0), 0.17, -np.pi, 2 * np.pi / 64, 8.0, ranges)
+        grid = OccupancyMap(1.0, 0.05, (-1.0, -1.0), 40, 40, bytes([0] * 1600), 5)
+        seen = KnownObject("red mug", (1.6, 0.7, 0.25), "kitchen counter", 1.0, 0.9)
+        port.feed = SensorFeed(scan=scan, map=grid)
+        port.snapshot = dataclasses.replace(port.snapshot, perception=PerceptionState("ok", known_objects=(seen,)))
+        assert mirror.update_once()  # nothing moved, but there is something new to see
+        overlay = mirror.perception
+        assert overlay._scan is not None and len(overlay._scan.points) == 64
+        assert overlay._map is not None and "red mug" in overlay._objects
+        assert not mirror.update_once()  # the same again: nothing is resent
+        port.feed = SensorFeed(scan=dataclasses.replace(scan, pose=(0.5, 0.0, 0.0)), map=grid)
+        assert mirror.update_once()  # the robot moved: the scan is redrawn
+        np.testing.assert_allclose(overlay._scan.points[:, 0].max(), 1.5, atol=1e-2)
     finally:
         mirror.stop()

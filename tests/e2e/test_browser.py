@@ -107,6 +107,33 @@ def test_keyboard_teleop_walks_the_robot_and_letting_go_stops_it(page, server) -
     expect(page.locator("#mode")).to_have_text("mode: idle", timeout=10_000)
 
 
+def test_camera_stream_with_detections_map_and_a_search_from_the_page(page, server) -> None:
+    expect = playwright_api.expect
+    expect(page.locator("#perc-status")).to_contain_text("camera", timeout=30_000)
+    expect(page.locator("#camera-fps")).to_contain_text("fps shown", timeout=15_000)
+    page.wait_for_timeout(2_000)
+    view = page.evaluate("({fps: window.humanoid.camera.fps, seq: window.humanoid.camera.seq,"
+                         " labels: window.humanoid.camera.detections.map(d => d.label)})")  # fmt: skip
+    assert view["fps"] >= 5 and view["seq"] > 10
+    assert "red mug" in view["labels"]  # in view from where the robot starts (seed 0), boxed on the image
+    # the camera canvas shows an image, not a blank
+    spread = page.evaluate(
+        "(() => { const c = document.getElementById('camera').getContext('2d').getImageData(0, 0, 320, 240).data;"
+        " let lo = 255, hi = 0;"
+        " for (let i = 0; i < c.length; i += 4) { lo = Math.min(lo, c[i]); hi = Math.max(hi, c[i]); }"
+        " return hi - lo; })()"
+    )
+    assert spread > 60
+    expect(page.locator("#map-info")).to_contain_text("scans", timeout=10_000)
+    expect(page.locator("#known-objects")).to_contain_text("red mug: kitchen counter")
+
+    page.fill("#command-text", "find the green apple")
+    page.click("#send")
+    expect(page.locator("#plan-steps li").first).to_have_attribute("data-state", "succeeded", timeout=60_000)
+    expect(page.locator("#plan-steps li").first).to_contain_text("found green apple at")
+    expect(page.locator("#known-objects")).to_contain_text("green apple: kitchen counter")
+
+
 def test_sessions_page_shows_the_timeline(page, server) -> None:
     expect = playwright_api.expect
     page.goto(server.url + "/sessions")

@@ -1,0 +1,149 @@
+"""What the robot perceives: camera frames (with detections), the lidar scan, the occupancy map, world memory.
+
+`/ws/camera` streams frames to the page: for each new frame a JSON message {"type": "frame", seq, sim_time_s,
+width, height, detections, camera_hz} followed by one binary message, the JPEG. The detections belong to exactly
+the frame they precede, so overlays never lag the image.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import dataclasses
+import math
+from typing import Annotated, Any
+
+import cv2
+import numpy as np
+from fastapi import APIRouter, Depends, HTTPException, Response, WebSocket, WebSocketDisconnect
+
+from app.api.deps import runtime
+from app.runtime import Runtime
+from robot.interface import CameraImage, OccupancyMap, PerceptionState, ScanView
+
+router = APIRouter(tags=["perception"])
+RuntimeDep = Annotated[Runtime, Depends(runtime)]
+CAMERA_POLL_S = 0.02
+
+
+def perception_json(state: PerceptionState | None) -> dict[str, Any]:
+    if state is None:
+        return {"status": "off"}
+    return dataclasses.asdict(state)
+
+
+def _finite(value: float) -> float | None:
+    return value if math.isfinite(value) else None
+
+
+def scan_json(scan: ScanView) -> dict[str, Any]:
+    """As sensor_msgs/LaserScan (ranges with no return are null), plus the pose it was mapped from."""
+    angle_max = scan.angle_min + scan.angle_increment * (len(scan.ranges) - 1)
+    return {
+        "sim_time_s": scan.sim_time_s,
+        "pose": {"x": scan.pose[0], "y": scan.pose[1], "yaw_rad": scan.pose[2]},
+        "height_m": scan.height_m,
+        "angle_min": scan.angle_min,
+        "angle_max": angle_max,
+        "angle_increment": scan.angle_increment,
+        "range_max": scan.range_max,
+        "ranges": [_finite(r) for r in scan.ranges],
+    }
+
+
+def map_json(grid: OccupancyMap) -> dict[str, Any]:
+    """As nav_msgs/OccupancyGrid: data[j * width + i], 0-100, -1 unknown."""
+    return {
+        "sim_time_s": grid.sim_time_s,
+        "scans": grid.scans,
+        "info": {
+            "resolution": grid.resolution,
+            "width": grid.width,
+            "height": grid.height,
+            "origin": {"x": grid.origin[0], "y": grid.origin[1]},
+        },
+        "data": np.frombuffer(grid.data, dtype=np.int8).tolist(),
+    }
+
+
+def map_png(grid: OccupancyMap) -> bytes:
+    """The map as an image, +y up: unknown grey, free white, occupied black (shades in between)."""
+    data = np.frombuffer(grid.data, dtype=np.int8).reshape(grid.height, grid.width).astype(np.int16)
+    image = np.where(data < 0, 160, 255 - (data * 255) // 100).astype(np.uint8)
+    ok, png = cv2.imencode(".png", np.flipud(image))
+    if not ok:  # pragma: no cover
+        raise HTTPException(500, "could not encode the map")
+    return png.tobytes()
+
+
+@router.get("/api/perception")
+def perception(rt: RuntimeDep) -> dict[str, Any]:
+    return perception_json(rt.worker.state().perception)
+
+
+def _camera(rt: Runtime) -> CameraImage:
+    state = rt.worker.state().perception
+    frame = rt.worker.sensor_feed().camera
+    if frame is None:
+        status = state.status if state is not None else "off"
+        raise HTTPException(503, f"no camera frame yet (perception: {status})")
+    return frame
+
+
+@router.get("/api/camera.jpg", response_class=Response, responses={200: {"content": {"image/jpeg": {}}}})
+def camera_jpeg(rt: RuntimeDep) -> Response:
+    """The latest head-camera image."""
+    frame = _camera(rt)
+    headers = {"X-Frame-Seq": str(frame.seq), "X-Sim-Time": f"{frame.sim_time_s:.3f}", "Cache-Control": "no-store"}
+    return Response(frame.jpeg, media_type="image/jpeg", headers=headers)
+
+
+@router.get("/api/scan")
+def scan(rt: RuntimeDep) -> dict[str, Any]:
+    latest = rt.worker.sensor_feed().scan
+    if latest is None:
+        raise HTTPException(503, "no lidar scan yet")
+    return scan_json(latest)
+
+
+@router.get("/api/map")
+def occupancy_map(rt: RuntimeDep) -> dict[str, Any]:
+    grid = rt.worker.sensor_feed().map
+    if grid is None:
+        raise HTTPException(503, "no occupancy map yet")
+    return map_json(grid)
+
+
+@router.get("/api/map.png", response_class=Response, responses={200: {"content": {"image/png": {}}}})
+def occupancy_map_png(rt: RuntimeDep) -> Response:
+    grid = rt.worker.sensor_feed().map
+    if grid is None:
+        raise HTTPException(503, "no occupancy map yet")
+    headers = {
+        "Cache-Control": "no-store",
+        "X-Map-Origin": f"{grid.origin[0]:.4f},{grid.origin[1]:.4f}",
+        "X-Map-Resolution": f"{grid.resolution:.4f}",
+        "X-Map-Scans": str(grid.scans),
+    }
+    return Response(map_png(grid), media_type="image/png", headers=headers)
+
+
+@router.websocket("/ws/camera")
+async def camera_socket(ws: WebSocket) -> None:
+    rt: Runtime = ws.app.state.runtime
+    await ws.accept()
+    last_seq = -1
+    try:
+        while True:
+            frame = rt.worker.sensor_feed().camera
+            if frame is not None and frame.seq != last_seq:
+                last_seq = frame.seq
+                state = rt.worker.state().perception
+                await ws.send_json({
+                    "type": "frame", "seq": frame.seq, "sim_time_s": frame.sim_time_s, "width": frame.width,
+                    "height": frame.height, "camera_hz": state.camera_hz if state else 0.0,
+                    "detections": [dataclasses.asdict(d) for d in frame.detections],
+                })  # fmt: skip
+                await ws.send_bytes(frame.jpeg)
+            await asyncio.sleep(CAMERA_POLL_S)
+    except (WebSocketDisconnect, RuntimeError):
+        pass

@@ -1,0 +1,119 @@
+"""What perception believes, drawn in the 3D mirror: the lidar scan, the occupancy map on the floor, and each
+object where perception localised it (a box and a label).
+
+Viewers re-render on every update, in software on machines without a GPU, so nothing is sent unless it changed
+visibly: the scan when the robot moved or the scene did, the map when a cell changed, objects when they moved.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import viser
+
+from robot.interface import KnownObject, OccupancyMap, PerceptionState, ScanView
+
+SCAN_COLOUR = (230, 30, 30)
+OBJECT_COLOUR = (255, 200, 0)
+MAP_Z = 0.002
+# A scan is redrawn when the sensor moved this much (m, rad), or when this share of its beams changed by > 5 cm.
+SCAN_MOVE_M = 0.01
+SCAN_TURN_RAD = math.radians(1.0)
+SCAN_CHANGED_SHARE = 0.02
+OBJECT_MOVE_M = 0.005
+# Occupancy colours (RGBA): unknown is transparent, free a pale wash, occupied dark.
+FREE_RGBA = (255, 255, 255, 70)
+OCCUPIED_RGBA = (30, 30, 60, 210)
+
+
+def map_rgba(grid: OccupancyMap) -> np.ndarray:
+    """Rows along y from the grid's origin, columns along x: the orientation viser's image plane shows at
+    identity rotation (its first row lies at local -y)."""
+    data = np.frombuffer(grid.data, dtype=np.int8).reshape(grid.height, grid.width)
+    image = np.zeros((grid.height, grid.width, 4), dtype=np.uint8)
+    image[data >= 0] = FREE_RGBA
+    image[data >= 67] = OCCUPIED_RGBA
+    return image
+
+
+class PerceptionOverlay:
+    def __init__(self, server: viser.ViserServer) -> None:
+        self._scene = server.scene
+        self._scan: viser.PointCloudHandle | None = None
+        self._scan_drawn: ScanView | None = None
+        self._map: viser.ImageHandle | None = None
+        self._map_drawn: bytes | None = None
+        self._objects: dict[str, tuple[viser.BoxHandle, viser.LabelHandle, KnownObject]] = {}
+
+    def update(self, scan: ScanView | None, grid: OccupancyMap | None, state: PerceptionState | None) -> bool:
+        """Draw what changed; returns whether anything was sent."""
+        changed = False
+        if scan is not None and self._scan_changed(scan):
+            self._draw_scan(scan)
+            changed = True
+        if grid is not None and grid.data != self._map_drawn:
+            self._draw_map(grid)
+            changed = True
+        if state is not None:
+            changed |= self._draw_objects(state.known_objects)
+        return changed
+
+    def _scan_changed(self, scan: ScanView) -> bool:
+        old = self._scan_drawn
+        if old is None or len(old.ranges) != len(scan.ranges):
+            return True
+        moved = math.hypot(scan.pose[0] - old.pose[0], scan.pose[1] - old.pose[1]) > SCAN_MOVE_M
+        turned = abs(math.remainder(scan.pose[2] - old.pose[2], math.tau)) > SCAN_TURN_RAD
+        if moved or turned:
+            return True
+        a = np.nan_to_num(np.asarray(old.ranges), posinf=99.0)
+        b = np.nan_to_num(np.asarray(scan.ranges), posinf=99.0)
+        return float(np.mean(np.abs(a - b) > 0.05)) > SCAN_CHANGED_SHARE
+
+    def _draw_scan(self, scan: ScanView) -> None:
+        ranges = np.asarray(scan.ranges, dtype=float)
+        hit = np.isfinite(ranges)
+        x, y, yaw = scan.pose
+        angles = scan.angle_min + scan.angle_increment * np.arange(len(ranges))[hit] + yaw
+        r = ranges[hit]
+        points = np.stack([x + r * np.cos(angles), y + r * np.sin(angles), np.full(r.shape, scan.height_m)], axis=-1)
+        if self._scan is None:
+            self._scan = self._scene.add_point_cloud("/perception/scan", points.astype(np.float32), SCAN_COLOUR,
+                                                     point_size=0.02, point_shape="circle")  # fmt: skip
+        else:
+            self._scan.points = points.astype(np.float32)
+            self._scan.colors = np.tile(np.array(SCAN_COLOUR, dtype=np.uint8), (len(points), 1))
+        self._scan_drawn = scan
+
+    def _draw_map(self, grid: OccupancyMap) -> None:
+        width, height = grid.width * grid.resolution, grid.height * grid.resolution
+        centre = (grid.origin[0] + width / 2, grid.origin[1] + height / 2, MAP_Z)
+        if self._map is not None:
+            self._map.remove()
+        self._map = self._scene.add_image("/perception/map", map_rgba(grid), width, height, format="png",
+                                          position=centre, cast_shadow=False, receive_shadow=False)  # fmt: skip
+        self._map_drawn = grid.data
+
+    def _draw_objects(self, known: tuple[KnownObject, ...]) -> bool:
+        changed = False
+        for obj in known:
+            drawn = self._objects.get(obj.name)
+            if drawn is not None and math.dist(drawn[2].position, obj.position) < OBJECT_MOVE_M:
+                continue
+            x, y, z = obj.position
+            text = f"{obj.name} (seen)"
+            if drawn is None:
+                key = obj.name.replace(" ", "_")
+                box = self._scene.add_box(f"/perception/objects/{key}", OBJECT_COLOUR, (0.05, 0.05, 0.005),
+                                          position=(x, y, z + 0.001), opacity=0.8, cast_shadow=False,
+                                          receive_shadow=False)  # fmt: skip
+                label = self._scene.add_label(f"/perception/objects/{key}_label", text, position=(x, y, z + 0.12),
+                                              anchor="bottom-center")  # fmt: skip
+            else:
+                box, label, _ = drawn
+                box.position = (x, y, z + 0.001)
+                label.position = (x, y, z + 0.12)
+            self._objects[obj.name] = (box, label, obj)
+            changed = True
+        return changed

@@ -1,0 +1,1 @@
+"""Navigation: paths on an occupancy grid and following them through the walking controller's velocity input."""

@@ -1,0 +1,92 @@
+"""Follows a path with the walking controller's velocity input (pure pursuit): the robot's progress is its nearest
+point on the path, and it steers towards the point a lookahead further along, so it stays on the path round
+corners instead of cutting them; it turns in place when that point is far off its heading, and slows at the end.
+
+Gains as the closed-loop walking prototype used for go-to-pose (shared FINDINGS.md): heading error x 1.5 clipped
+to the turn limit, forward speed reduced as the heading error grows, turn in place beyond ~35 deg.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+LOOKAHEAD_M = 0.2
+MAX_FORWARD_M_S = 0.15
+MAX_TURN_RAD_S = 0.6
+HEADING_GAIN = 1.5
+TURN_IN_PLACE_RAD = 0.6
+ARRIVED_M = 0.08
+SLOW_DOWN_M = 0.3
+# How far along the path the robot's progress may jump in one update (m): a path that doubles back on itself
+# must not be skipped.
+PROGRESS_WINDOW_M = 0.5
+
+
+@dataclass(frozen=True)
+class FollowCommand:
+    vx: float
+    vy: float
+    yaw_rate: float
+    arrived: bool
+    remaining_m: float
+
+
+class PathFollower:
+    def __init__(self, waypoints: list[tuple[float, float]]) -> None:
+        if not waypoints:
+            raise ValueError("a path needs at least one waypoint")
+        points = [waypoints[0]] + [b for a, b in itertools.pairwise(waypoints) if math.dist(a, b) > 1e-9]
+        self.waypoints = points
+        self._points = np.asarray(points, dtype=float)
+        lengths = np.linalg.norm(np.diff(self._points, axis=0), axis=1) if len(points) > 1 else np.zeros(0)
+        self._arc = np.concatenate([[0.0], np.cumsum(lengths)])
+        self.length = float(self._arc[-1])
+        self.progress = 0.0  # arc length of the robot's nearest point on the path
+
+    def point_at(self, s: float) -> tuple[float, float]:
+        """The path's point `s` metres from its start (clamped to its ends)."""
+        s = min(max(s, 0.0), self.length)
+        k = int(np.searchsorted(self._arc, s, side="right")) - 1
+        k = min(k, len(self._points) - 2) if len(self._points) > 1 else 0
+        if len(self._points) == 1:
+            return (float(self._points[0, 0]), float(self._points[0, 1]))
+        t = (s - self._arc[k]) / max(self._arc[k + 1] - self._arc[k], 1e-9)
+        p = self._points[k] + t * (self._points[k + 1] - self._points[k])
+        return (float(p[0]), float(p[1]))
+
+    def _nearest_progress(self, x: float, y: float) -> float:
+        best_s, best_d = self.progress, math.inf
+        for k in range(len(self._points) - 1):
+            a, b = self._points[k], self._points[k + 1]
+            if self._arc[k] > self.progress + PROGRESS_WINDOW_M or self._arc[k + 1] < self.progress:
+                continue
+            ab = b - a
+            t = float(np.clip(np.dot([x - a[0], y - a[1]], ab) / max(float(np.dot(ab, ab)), 1e-12), 0.0, 1.0))
+            s = self._arc[k] + t * float(np.linalg.norm(ab))
+            if s > self.progress + PROGRESS_WINDOW_M:
+                continue
+            d = math.dist((x, y), (a[0] + t * ab[0], a[1] + t * ab[1]))
+            if d < best_d:
+                best_s, best_d = s, d
+        return max(self.progress, best_s)
+
+    def update(self, x: float, y: float, yaw: float) -> FollowCommand:
+        """The velocity command for a robot at (x, y) heading `yaw` (world frame)."""
+        self.progress = self._nearest_progress(x, y)
+        goal = self.point_at(self.length)
+        remaining = (self.length - self.progress) + math.dist((x, y), self.point_at(self.progress))
+        if self.length - self.progress < LOOKAHEAD_M and math.dist((x, y), goal) < ARRIVED_M:
+            return FollowCommand(0.0, 0.0, 0.0, True, 0.0)
+        tx, ty = self.point_at(self.progress + LOOKAHEAD_M)
+        if math.dist((x, y), (tx, ty)) < 1e-6:
+            tx, ty = goal
+        error = math.remainder(math.atan2(ty - y, tx - x) - yaw, math.tau)
+        yaw_rate = max(-MAX_TURN_RAD_S, min(MAX_TURN_RAD_S, HEADING_GAIN * error))
+        if abs(error) > TURN_IN_PLACE_RAD:
+            return FollowCommand(0.0, 0.0, yaw_rate, False, remaining)
+        speed = MAX_FORWARD_M_S * min(1.0, remaining / SLOW_DOWN_M + 0.3) * math.cos(error) ** 2
+        return FollowCommand(speed, 0.0, yaw_rate, False, remaining)

@@ -1,0 +1,141 @@
+"""Where the sensor suite runs: in the caller's thread, or in a child process.
+
+Rendering holds the interpreter lock for its ~10 ms (measured: a thread rendering in a loop delayed a 100 Hz
+loop in the same process by up to 0.7 s), so in real time the suite runs in its own process, like the gait
+planner (started with `subprocess`, since the robot worker may itself be a daemon process). The child builds its
+own copy of the scene from the layout and keeps the occupancy map; each request is one sensing instant.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import pickle
+import subprocess
+import sys
+from typing import Protocol
+
+from robot.model.world import WorldLayout
+from robot.perception.occupancy import OccupancyGrid
+from robot.perception.suite import SensorOutput, SensorSnapshot, SensorSuite
+
+
+class SensorError(RuntimeError):
+    pass
+
+
+class SensorRunner(Protocol):
+    def process(self, snapshot: SensorSnapshot) -> SensorOutput: ...
+
+    def clear_map(self) -> OccupancyGrid: ...
+
+    def close(self) -> None: ...
+
+
+class InlineSensors:
+    """The suite in the calling thread (headless runs, tests). Create and use it on one thread (EGL)."""
+
+    def __init__(self, layout: WorldLayout) -> None:
+        self.suite = SensorSuite(layout)
+
+    def process(self, snapshot: SensorSnapshot) -> SensorOutput:
+        return self.suite.process(snapshot)
+
+    def clear_map(self) -> OccupancyGrid:
+        self.suite.mapper.clear()
+        self.suite.matcher.reset()
+        return self.suite.map()
+
+    def close(self) -> None:
+        self.suite.close()
+
+
+class ProcessSensors:
+    """The suite in a child process; one request at a time, answered in order."""
+
+    def __init__(self, layout: WorldLayout) -> None:
+        request_read, request_write = os.pipe()
+        answer_read, answer_write = os.pipe()
+        self._process = subprocess.Popen(
+            [sys.executable, "-m", "robot.perception.sensor_process", str(request_read), str(answer_write)],
+            pass_fds=(request_read, answer_write),
+            stdin=subprocess.DEVNULL,
+        )
+        os.close(request_read)
+        os.close(answer_write)
+        self._requests = os.fdopen(request_write, "wb")
+        self._answers = os.fdopen(answer_read, "rb")
+        self._call(("start", layout))
+
+    def _call(self, request: tuple[object, ...]) -> object:
+        try:
+            pickle.dump(request, self._requests)
+            self._requests.flush()
+            answer = pickle.load(self._answers)
+        except (OSError, EOFError) as exc:
+            raise SensorError(f"the sensor process is gone (exit code {self._process.poll()})") from exc
+        if isinstance(answer, BaseException):
+            raise SensorError(f"sensing failed: {answer!r}") from answer
+        return answer
+
+    def process(self, snapshot: SensorSnapshot) -> SensorOutput:
+        answer = self._call(("process", snapshot))
+        assert isinstance(answer, SensorOutput)
+        return answer
+
+    def clear_map(self) -> OccupancyGrid:
+        answer = self._call(("clear_map",))
+        assert isinstance(answer, OccupancyGrid)
+        return answer
+
+    def close(self) -> None:
+        with contextlib.suppress(OSError):
+            self._requests.close()
+        try:
+            self._process.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            self._process.kill()
+        self._answers.close()
+
+
+def _lower_priority() -> None:
+    """Sensing must never compete with the control loop: this process may have inherited the worker's real-time
+    scheduling; it runs as an ordinary, slightly nice process instead."""
+    with contextlib.suppress(OSError, AttributeError, PermissionError):
+        os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
+    with contextlib.suppress(OSError):
+        os.nice(5)
+
+
+def _serve(request_fd: str, answer_fd: str) -> None:
+    _lower_priority()
+    requests = os.fdopen(int(request_fd), "rb")
+    answers = os.fdopen(int(answer_fd), "wb")
+    sensors: InlineSensors | None = None
+    while True:
+        try:
+            request = pickle.load(requests)
+        except EOFError:
+            break
+        try:
+            if request[0] == "start":
+                sensors = InlineSensors(request[1])
+                answer: object = "ready"
+            elif sensors is None:
+                answer = SensorError("the sensor suite was not started")
+            elif request[0] == "process":
+                answer = sensors.process(request[1])
+            elif request[0] == "clear_map":
+                answer = sensors.clear_map()
+            else:
+                answer = SensorError(f"unknown request {request[0]!r}")
+        except Exception as exc:  # the worker decides what a failed frame means
+            answer = exc
+        pickle.dump(answer, answers)
+        answers.flush()
+    if sensors is not None:
+        sensors.close()
+
+
+if __name__ == "__main__":
+    _serve(*sys.argv[1:3])

@@ -1,0 +1,146 @@
+"""The simulated robot's exteroceptive sensors and what is computed from them, in one place.
+
+`SensorSuite.process(snapshot)` takes the simulation's state at one instant (to render and ray-cast the world as
+it is) and the robot's *estimated* trunk pose (leg odometry + IMU), and returns a camera frame with its detections
+and a lidar scan, and updates the occupancy map. Images and scans are made from the true state, as real sensors
+are; where things are in the world is computed from the estimate, as it must be on the real robot.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import cv2
+import mujoco
+import numpy as np
+
+from robot.model import humanoid_v1
+from robot.model.scene import build_scene
+from robot.model.world import WorldLayout
+from robot.perception.camera import SimRGBDCamera
+from robot.perception.detector import Detection, ObjectDetector, catalogue
+from robot.perception.geometry import invert, quat_wxyz_to_matrix, transform, yaw_of
+from robot.perception.lidar import LaserScan, SimLidar
+from robot.perception.localisation import Correction, ScanMatcher
+from robot.perception.occupancy import GridSpec, OccupancyGrid, OccupancyMapper
+
+JPEG_QUALITY = 80
+MAP_SIZE_M = (8.0, 8.0)  # a map larger than the apartment, centred where the robot starts
+
+
+@dataclass(frozen=True)
+class SensorSnapshot:
+    """The instant to sense: the simulation's full qpos, and the trunk pose the robot believes it has."""
+
+    sim_time_s: float
+    qpos: np.ndarray
+    trunk_position: np.ndarray  # (3,) estimated, world frame
+    trunk_quat: np.ndarray  # (4,) wxyz, estimated
+    camera: bool = True
+    lidar: bool = True
+
+
+@dataclass(frozen=True)
+class CameraFrame:
+    sim_time_s: float
+    seq: int
+    width: int
+    height: int
+    jpeg: bytes
+    detections: tuple[Detection, ...]
+    world_from_camera: np.ndarray  # 4x4, estimated
+    render_ms: float
+    detect_ms: float
+
+
+@dataclass(frozen=True)
+class ScanFrame:
+    scan: LaserScan
+    pose: tuple[float, float, float]  # the sensor pose (x, y, yaw) the scan was mapped from: odometry, corrected
+    odom_pose: tuple[float, float, float]  # the same by odometry alone
+
+
+@dataclass(frozen=True)
+class SensorOutput:
+    camera: CameraFrame | None = None
+    scan: ScanFrame | None = None
+    grid: OccupancyGrid | None = None
+    correction: Correction = field(default_factory=Correction)  # odometry -> map, from scan matching
+    timings_ms: dict[str, float] = field(default_factory=dict)
+
+
+class SensorSuite:
+    def __init__(self, layout: WorldLayout, map_every: int = 5) -> None:
+        self.layout = layout
+        self.model = build_scene(layout)
+        self.data = mujoco.MjData(self.model)
+        self._trunk = self.model.body(humanoid_v1.TRUNK_BODY).id
+        self._lidar_site = self.model.site(humanoid_v1.LIDAR_SITE).id
+        self.camera = SimRGBDCamera(self.model, seed=layout.seed)
+        self.lidar = SimLidar(self.model, seed=layout.seed)
+        self.detector = ObjectDetector(catalogue(layout), self.camera.depth_noise_per_m2)
+        x, y, _ = layout.robot_start
+        self.mapper = OccupancyMapper(GridSpec.around(round(x, 1), round(y, 1), *MAP_SIZE_M))
+        self.matcher = ScanMatcher(self.mapper.spec)
+        self._map_every = map_every
+        self._seq = 0
+
+    def process(self, snapshot: SensorSnapshot) -> SensorOutput:
+        data = self.data
+        data.qpos[:] = snapshot.qpos
+        data.time = snapshot.sim_time_s
+        mujoco.mj_kinematics(self.model, data)
+        mujoco.mj_camlight(self.model, data)
+        # estimated world-from-trunk times the true (encoder) kinematics from the trunk to each sensor
+        believed = transform(quat_wxyz_to_matrix(snapshot.trunk_quat), snapshot.trunk_position)
+        trunk_true = transform(data.xmat[self._trunk].reshape(3, 3), data.xpos[self._trunk])
+        to_odom = believed @ invert(trunk_true)  # true world -> where odometry believes things are
+        timings: dict[str, float] = {}
+        camera = scan = grid = None
+        if snapshot.lidar:
+            started = time.perf_counter()
+            raw = self.lidar.scan(data)
+            mount = transform(data.site_xmat[self._lidar_site].reshape(3, 3), data.site_xpos[self._lidar_site])
+            site = to_odom @ mount
+            odom_pose = (float(site[0, 3]), float(site[1, 3]), yaw_of(site[:3, :3]))
+            correction = self.matcher.update(raw, odom_pose)
+            pose = correction.apply(*odom_pose)
+            self.mapper.integrate(raw, *pose)
+            scan = ScanFrame(raw, pose, odom_pose)
+            if self.mapper.scans % self._map_every == 1 or self._map_every == 1:
+                grid = self.mapper.snapshot()
+            timings["lidar_map_ms"] = (time.perf_counter() - started) * 1e3
+        if snapshot.camera:
+            camera = self._capture(self.matcher.correction.matrix() @ to_odom, timings)
+        return SensorOutput(camera, scan, grid, self.matcher.correction, timings)
+
+    def _capture(self, correction: np.ndarray, timings: dict[str, float]) -> CameraFrame:
+        started = time.perf_counter()
+        image = self.camera.capture(self.data)
+        rendered = time.perf_counter()
+        believed_camera = correction @ image.world_from_camera
+        detections = self.detector.detect(image.rgb, image.depth, image.intrinsics, believed_camera)
+        detected = time.perf_counter()
+        ok, jpeg = cv2.imencode(".jpg", image.rgb[:, :, ::-1], [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
+        encoded = time.perf_counter()
+        timings.update(render_ms=(rendered - started) * 1e3, detect_ms=(detected - rendered) * 1e3,
+                       encode_ms=(encoded - detected) * 1e3)  # fmt: skip
+        self._seq += 1
+        return CameraFrame(
+            sim_time_s=float(self.data.time),
+            seq=self._seq,
+            width=image.intrinsics.width,
+            height=image.intrinsics.height,
+            jpeg=jpeg.tobytes() if ok else b"",
+            detections=tuple(detections),
+            world_from_camera=believed_camera,
+            render_ms=timings["render_ms"],
+            detect_ms=timings["detect_ms"],
+        )
+
+    def map(self) -> OccupancyGrid:
+        return self.mapper.snapshot()
+
+    def close(self) -> None:
+        self.camera.close()

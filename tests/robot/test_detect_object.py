@@ -1,0 +1,76 @@
+"""`detect_object` on the whole robot: it looks (head, then body), reports where the object is, and remembers."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+from robot.interface import ExecutePlan, PlanState
+from robot.model.world import generate_world
+from robot.sim.backend import MujocoSimBackend
+from robot.worker import RobotWorker
+
+
+def _detect(worker: RobotWorker, name: str, timeout_s: float = 240.0):
+    reply = worker.submit(ExecutePlan({"steps": [{"action": "detect_object", "args": {"object": name}}]}))
+    assert reply.accepted, reply
+    assert worker.wait_for(lambda s: s.plan is not None and s.plan.state != PlanState.RUNNING, timeout_s)
+    return worker.state()
+
+
+def _headless(layout, **kwargs) -> RobotWorker:
+    worker = RobotWorker(layout, backend=MujocoSimBackend(layout), realtime=False, **kwargs)
+    worker.start()
+    return worker
+
+
+def test_finds_the_mug_reports_where_it_is_and_remembers_it(make_worker) -> None:
+    worker = make_worker(realtime=False, perception=True)
+    state = _detect(worker, "mug")  # an alias: resolved to the red mug
+    step = state.plan.steps[0]
+    assert state.plan.state == PlanState.SUCCEEDED, step.detail
+    truth = dict((o.name, o.position) for o in state.objects)["red mug"]
+    known = {k.name: k for k in state.perception.known_objects}
+    assert math.dist(known["red mug"].position, truth) < 0.015
+    assert known["red mug"].place == "kitchen counter"
+    assert "found red mug at" in step.detail and "kitchen counter" in step.detail
+    assert any(e.kind == "perception/object_found" for e in worker.recent_events())
+
+
+def test_an_object_behind_the_robot_is_found_by_turning_around() -> None:
+    base = generate_world(0)
+    counter = next(p for p in base.places if p.name == "kitchen counter").surface
+    x, y, _ = base.robot_start
+    away = math.atan2(counter.y - y, counter.x - x) + math.pi  # the counter straight behind
+    layout = dataclasses.replace(base, robot_start=(x, y, away))
+    worker = _headless(layout)
+    try:
+        # forget where the world says it is: the search must look around, not just glance at the counter
+        worker._expected_position = lambda name: None  # type: ignore[method-assign]
+        state = _detect(worker, "green apple")
+        assert state.plan.state == PlanState.SUCCEEDED, state.plan.steps[0].detail
+        found = next(e for e in reversed(worker.recent_events()) if e.kind == "perception/object_found")
+        assert found.data["views"] > 5  # it had to sweep and turn
+        heading_change = abs(math.remainder(state.base_yaw_rad - away, math.tau))
+        assert heading_change > math.radians(60), "it turned its body to look"
+        assert not state.fallen
+    finally:
+        worker.stop()
+
+
+def test_an_object_that_is_not_there_is_reported_not_found() -> None:
+    layout = generate_world(0)
+    backend = MujocoSimBackend(layout)
+    worker = RobotWorker(layout, backend=backend, realtime=False)
+    apple = backend.model.joint("obj_green_apple_free").qposadr[0]
+    backend.data.qpos[apple : apple + 3] = (5.0, 5.0, -1.0)  # out of the apartment, under the floor
+    worker.start()
+    try:
+        state = _detect(worker, "green apple", timeout_s=400)
+        step = state.plan.steps[0]
+        assert state.plan.state == PlanState.FAILED
+        assert step.detail.startswith("green apple not found: looked in") and "turned 240 deg" in step.detail
+        assert "green apple" not in {k.name for k in state.perception.known_objects}
+        assert not state.fallen
+    finally:
+        worker.stop()
