@@ -250,6 +250,18 @@ class LocomotionState:
 
 
 @dataclass(frozen=True)
+class Proprioception:
+    """The IMU (as ROS sensor_msgs/Imu, in the trunk frame) and the force pads under each sole (N; front-left,
+    front-right, back-left, back-right of each foot): what the balance controller and the leg odometry read."""
+
+    orientation: tuple[float, float, float, float]  # wxyz
+    angular_velocity: tuple[float, float, float]  # rad/s
+    linear_acceleration: tuple[float, float, float]  # m/s^2
+    left_foot_n: tuple[float, ...]
+    right_foot_n: tuple[float, ...]
+
+
+@dataclass(frozen=True)
 class DetectedObject:
     """A known object found in a camera frame, with where it is in the world (centre of its base)."""
 
@@ -356,6 +368,7 @@ class RobotState:
     control: ControlStats
     locomotion: LocomotionState | None = None
     perception: PerceptionState | None = None
+    proprioception: Proprioception | None = None
 
 
 @dataclass(frozen=True)

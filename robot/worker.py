@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 import queue
 import shutil
+import sys
 import tempfile
 import threading
 import time
@@ -48,6 +49,7 @@ from robot.interface import (
     PlanState,
     PlanStatus,
     Posture,
+    Proprioception,
     Refusal,
     ReleaseEStop,
     Replan,
@@ -181,6 +183,10 @@ class RobotWorker:
     def start(self) -> None:
         if self._threads:
             return
+        if self.realtime:
+            # the control thread must never wait long for the interpreter lock behind another thread (perception,
+            # the task thread): the default switch interval is 5 ms, half a control period
+            sys.setswitchinterval(min(sys.getswitchinterval(), 0.0005))
         self._stop.clear()
         self._threads = [
             threading.Thread(target=self._control_loop, name="robot-control", daemon=True),
@@ -600,8 +606,9 @@ class RobotWorker:
             self._posture_name = Posture.STAND
         self._loco.halt()
         self._head.reset(start=(float(self._stand[_HEAD_PAN]), float(self._stand[_HEAD_TILT])))
-        if self._perception is not None:
+        if self._perception is not None:  # objects are back where the world puts them; odometry starts over
             self._perception.memory.clear()
+            self._perception.clear_map()
         self.backend.reset(self._stand)
         self._posture.hold(self._stand)
         self._measured = self.backend.read()
@@ -809,6 +816,13 @@ class RobotWorker:
                 control=self._stats.snapshot(),
                 locomotion=self._locomotion_state(posture),
                 perception=self._perception_state(),
+                proprioception=Proprioception(
+                    orientation=_floats(measured.imu_quat),
+                    angular_velocity=_floats(measured.imu_gyro),
+                    linear_acceleration=_floats(measured.imu_accel),
+                    left_foot_n=_floats(measured.foot_forces[0]),
+                    right_foot_n=_floats(measured.foot_forces[1]),
+                ),
             )
         )
 
@@ -904,6 +918,10 @@ class _TaskBody:
         perception = self._worker._perception
         assert perception is not None
         return perception.detections_after(self._worker._sim_time)
+
+
+def _floats(values: np.ndarray) -> tuple[float, ...]:
+    return tuple(float(v) for v in values)
 
 
 def _wrap(angle: float) -> float:

@@ -276,6 +276,10 @@ def placo_mjcf() -> str:
         if joint.type == mujoco.mjtJoint.mjJNT_FREE:
             spec.delete(joint)
     spec.body(TRUNK_BODY).add_body(name=TRUNK_FRAME, mass=FRAME_MASS, inertia=[FRAME_INERTIA] * 3)
-    # placo measures the trunk-to-hip spacing from this frame.
+    # placo measures the trunk-to-hip spacing from this frame, and the head's geometry from the last three.
     spec.body("l_hip_yaw_link").add_body(name="left_hip_yaw", mass=FRAME_MASS, inertia=[FRAME_INERTIA] * 3)
+    spec.body("head_pan_link").add_body(name="head_base", mass=FRAME_MASS, inertia=[FRAME_INERTIA] * 3)
+    spec.body(HEAD_CAMERA_BODY).add_body(name="head_pitch", mass=FRAME_MASS, inertia=[FRAME_INERTIA] * 3)
+    spec.body(HEAD_CAMERA_BODY).add_body(name="camera", pos=list(CAMERA_POS), mass=FRAME_MASS,
+                                         inertia=[FRAME_INERTIA] * 3)  # fmt: skip
     return spec.to_xml()

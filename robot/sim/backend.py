@@ -33,6 +33,7 @@ class Measurements:
     base_quat: np.ndarray  # (4,) wxyz
     imu_quat: np.ndarray  # (4,) wxyz, trunk orientation from the IMU
     imu_gyro: np.ndarray  # (3,) rad/s in the trunk frame
+    imu_accel: np.ndarray  # (3,) m/s^2 in the trunk frame (specific force: +9.8 up when still)
     foot_forces: np.ndarray  # (2, 4) N on each sole's four force pads, left then right
 
     @property
@@ -67,6 +68,7 @@ class MujocoSimBackend:
         self.joint_names = humanoid_v1.JOINT_NAMES
         self._gyro = self._sensor_slice("imu_gyro")
         self._imu_quat = self._sensor_slice("imu_quat")
+        self._accel = self._sensor_slice("imu_accel")
         self._fsr = [self._sensor_slice(f"{side}_foot_fsr{i}") for side in ("left", "right") for i in range(4)]
         self.reset()
 
@@ -111,6 +113,7 @@ class MujocoSimBackend:
             base_quat=d.qpos[3:7].copy(),
             imu_quat=d.sensordata[self._imu_quat].copy(),
             imu_gyro=d.sensordata[self._gyro].copy(),
+            imu_accel=d.sensordata[self._accel].copy(),
             foot_forces=np.array([d.sensordata[s][0] for s in self._fsr]).reshape(2, 4),
         )
 

@@ -156,6 +156,16 @@ function renderState(s) {
   $("st-mode").textContent = s.mode + (s.fallen ? " (fallen)" : "");
   $("st-pose").textContent = `x ${fmt(s.pose.x)} m, y ${fmt(s.pose.y)} m, z ${fmt(s.pose.z)} m, yaw ${fmt(s.pose.yaw_rad * 180 / Math.PI, 0)}°`;
   $("st-tilt").textContent = `${fmt(s.tilt_deg, 1)}°`;
+  const body = s.proprioception;
+  if (body) {
+    const [w, x, y, z] = body.orientation;
+    const roll = Math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y)) * 180 / Math.PI;
+    const pitch = Math.asin(Math.max(-1, Math.min(1, 2 * (w * y - z * x)))) * 180 / Math.PI;
+    const gyro = Math.hypot(...body.angular_velocity);
+    $("st-imu").textContent = `${fmt(roll, 1)}° / ${fmt(pitch, 1)}°, ${fmt(gyro, 2)} rad/s`;
+    const sum = (a) => a.reduce((p, q) => p + q, 0);
+    $("st-feet").textContent = `${fmt(sum(body.left_foot_n), 1)} N / ${fmt(sum(body.right_foot_n), 1)} N`;
+  }
   $("st-time").textContent = `${fmt(s.sim_time_s, 1)} s`;
   $("st-rtf").textContent = fmt(s.control.rtf, 2);
   $("st-tick").textContent = `${fmt(s.control.tick_p50_ms, 2)} / ${fmt(s.control.tick_p99_ms, 2)} ms, ${s.control.deadline_misses} missed`;

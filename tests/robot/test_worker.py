@@ -5,6 +5,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+import pytest
 
 from robot.interface import (
     EStop,
@@ -39,6 +40,22 @@ def test_worker_runs_in_real_time_and_stands(make_worker) -> None:
     assert state.mode == Mode.IDLE and not state.fallen
     assert 0.8 < state.control.rtf < 1.2
     assert state.control.ticks >= 90  # statistics refresh once a second
+
+
+def test_state_carries_the_imu_and_the_foot_force_pads(make_worker) -> None:
+    """Standing still: the IMU agrees with the trunk's orientation and feels gravity; the two feet carry the
+    robot's weight between them."""
+    worker = make_worker(realtime=False)
+    assert worker.wait_for(lambda s: s.sim_time_s >= 1.0, 30.0)
+    state = worker.state()
+    body = state.proprioception
+    np.testing.assert_allclose(np.abs(np.dot(body.orientation, state.qpos[3:7])), 1.0, atol=1e-6)
+    assert np.linalg.norm(body.angular_velocity) < 0.2
+    assert np.linalg.norm(body.linear_acceleration) == pytest.approx(9.81, abs=0.5)
+    weight = worker.backend.model.body_subtreemass[worker.backend.model.body("body_link").id] * 9.81
+    left, right = sum(body.left_foot_n), sum(body.right_foot_n)
+    assert left + right == pytest.approx(weight, rel=0.1)
+    assert min(left, right) > 0.3 * weight  # standing on both feet
 
 
 def test_say_command_runs_to_success_with_per_step_status(make_worker) -> None:
