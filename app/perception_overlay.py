@@ -23,7 +23,7 @@ SCAN_TURN_RAD = math.radians(1.0)
 SCAN_CHANGED_SHARE = 0.02
 OBJECT_MOVE_M = 0.005
 # Occupancy colours (RGBA): unknown is transparent, free a pale wash, occupied dark.
-FREE_RGBA = (255, 255, 255, 70)
+FREE_RGBA = (110, 160, 255, 60)  # a pale blue wash: visible on a light floor
 OCCUPIED_RGBA = (30, 30, 60, 210)
 
 
