@@ -127,7 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
                        help="walk, perception: seconds of real-time walking for the tick and rate figures")  # fmt: skip
     bench.add_argument("--seeds", type=int, default=50, help="perception: worlds to place the robot in")
     bench.add_argument("--views", type=int, default=6, help="perception: viewpoints per world")
-    bench.add_argument("--tours", type=int, default=3, help="perception: mapping tours (one world each)")
+    bench.add_argument("--tours", type=int, default=5, help="perception: mapping tours (one world each)")
     bench.set_defaults(func=_bench)
     return parser
 

@@ -37,7 +37,7 @@ TARGETS = {"recall_min": 0.98, "false_labels": 0, "error_median_m": 0.015, "erro
            "rtf_min": 1.0, "map_iou_min": 0.85}  # fmt: skip
 
 
-def run_perception(seeds: int = 50, views: int = 6, seed: int = 0, realtime_s: float = 30.0, tours: int = 3,
+def run_perception(seeds: int = 50, views: int = 6, seed: int = 0, realtime_s: float = 30.0, tours: int = 5,
                    workers: int | None = None) -> dict[str, Any]:  # fmt: skip
     started = time.perf_counter()
     workers = workers or max(1, min(2, os.cpu_count() or 1))
