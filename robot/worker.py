@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from robot.control.head import HeadController
+from robot.control.head import DEFAULT_TILT, HeadController
 from robot.control.locomotion import LocomotionController, Velocity, clip_velocity
 from robot.control.posture import PostureController
 from robot.control.priority import raise_thread_priority
@@ -67,6 +67,8 @@ from robot.interface import (
 from robot.model import humanoid_v1
 from robot.model.scene import scene_xml
 from robot.model.world import WorldLayout
+from robot.navigation.costmap import Costmap
+from robot.navigation.navigator import NavigationFailed, Navigator
 from robot.perception.geometry import matrix_to_quat_wxyz, yaw_of
 from robot.perception.search import ObjectNotFound, find_object
 from robot.perception.sensor_process import SensorError
@@ -275,7 +277,32 @@ class RobotWorker:
     def _capabilities(self) -> dict[str, Capability]:
         capabilities = default_capabilities()
         capabilities["detect_object"] = self._detect_object
+        capabilities["navigate_to"] = self._navigate_to
         return capabilities
+
+    def _navigate_to(self, args: dict[str, str], ctx: ExecutionContext) -> str:
+        """Walk to a named place: a planned path to the open floor in front of it, then a short precise approach."""
+        if self._perception is None:
+            raise StepFailed("navigation needs the lidar's map, and perception is off in this worker")
+        name = self._world_context().resolve_place(args["target"])
+        place = next((p for p in self.layout.places if p.name == name), None)
+        if place is None:
+            raise StepFailed(f"unknown place {args['target']!r}")
+        self._head.point(0.0, DEFAULT_TILT)  # look ahead and down while walking
+        try:
+            report = Navigator(_NavBody(self, ctx), lambda: self._sim_time).go(place.staging, place.approach)
+        except NavigationFailed as exc:
+            raise StepFailed(str(exc)) from exc
+        finally:
+            self._set_task_velocity(Velocity())
+        replans = f", {report.replans} replan{'s' if report.replans != 1 else ''}" if report.replans else ""
+        self._bus.publish("navigation/arrived", f"at the {place.name}", place=place.name, walked_m=report.walked_m,
+                          replans=report.replans, error_m=report.final_error_m, sim_s=report.sim_s,
+                          path=[list(p) for p in report.path])  # fmt: skip
+        return (
+            f"at the {place.name}: walked {report.walked_m:.2f} m in {report.sim_s:.0f} s{replans}, "
+            f"{report.final_error_m * 100:.1f} cm and {report.final_heading_error_deg:.0f} deg from the goal"
+        )
 
     def _detect_object(self, args: dict[str, str], ctx: ExecutionContext) -> str:
         """Look for the object (head, then body); found: its 3D position goes into the world memory."""
@@ -918,6 +945,42 @@ class _TaskBody:
         perception = self._worker._perception
         assert perception is not None
         return perception.detections_after(self._worker._sim_time)
+
+
+class _NavBody:
+    """The legs and the map as navigation uses them (the navigator's `NavBody`), in simulated time."""
+
+    def __init__(self, worker: RobotWorker, ctx: ExecutionContext) -> None:
+        self._worker = worker
+        self._ctx = ctx
+        self._cached: tuple[int, float, Costmap] | None = None
+
+    def pose(self) -> tuple[float, float, float]:
+        position, rotation = self._worker._map_trunk()
+        return float(position[0]), float(position[1]), yaw_of(rotation)
+
+    def costmap(self, inflate_m: float) -> Costmap | None:
+        perception = self._worker._perception
+        grid = perception.feed().map if perception is not None else None
+        if grid is None:
+            return None
+        if self._cached is None or self._cached[0] != grid.scans or self._cached[1] != inflate_m:
+            self._cached = (grid.scans, inflate_m, Costmap.from_map(grid, inflate_m))
+        return self._cached[2]
+
+    def drive(self, vx: float, vy: float, yaw_rate: float) -> None:
+        velocity = clip_velocity(Velocity(vx, vy, yaw_rate), self._worker._loco.velocity.limits)
+        self._worker._set_task_velocity(velocity)
+
+    def wait(self, seconds: float) -> None:
+        self._ctx.wait_sim(seconds)
+
+    def walking(self) -> bool:
+        return self._worker._loco.moving
+
+    def fallen(self) -> bool:
+        with self._worker._lock:
+            return self._worker._fallen
 
 
 def _floats(values: np.ndarray) -> tuple[float, ...]:

@@ -52,9 +52,10 @@ def test_command_is_planned_and_executed(client) -> None:
 
 
 def test_unbuilt_capability_is_reported_not_faked(client) -> None:
-    assert client.post("/api/commands", json={"text": "go to the dock"}).status_code == 202
+    steps = [{"action": "pick_object", "args": {"object": "red mug"}}, {"action": "say", "args": {"text": "got it"}}]
+    assert client.post("/api/commands", json={"plan": {"steps": steps}}).status_code == 202
     plan = wait_until(lambda: (p := plan_state(client)) and p["state"] == "failed" and p)
-    assert plan["steps"][0]["state"] == "failed" and "no path planner" in plan["steps"][0]["detail"]
+    assert plan["steps"][0]["state"] == "failed" and "not available" in plan["steps"][0]["detail"]
     assert plan["steps"][1]["state"] == "skipped"
 
 

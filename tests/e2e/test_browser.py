@@ -53,9 +53,9 @@ def test_typed_command_runs_and_the_plan_shows_per_step_status(page) -> None:
     page.click("#send")
     steps = page.locator("#plan-steps li")
     expect(steps).to_have_count(4)
-    expect(steps.first).to_have_attribute("data-state", "failed", timeout=15_000)
-    expect(steps.first).to_contain_text("no path planner")
-    expect(page.locator("#plan-state")).to_have_text("failed")
+    expect(steps.first).to_have_attribute("data-state", "running", timeout=15_000)  # walking to the counter
+    page.click("#cancel")
+    expect(page.locator("#plan-state")).to_have_text("cancelled", timeout=15_000)
 
     page.fill("#command-text", "pick up the purple elephant")
     page.click("#send")
@@ -142,7 +142,7 @@ def test_sessions_page_shows_the_timeline(page, server) -> None:
     first_row.click()
     expect(page.locator("#commands")).to_contain_text("say hello from the browser")
     expect(page.locator("#timeline")).to_contain_text("estop/latched")
-    expect(page.locator("#plans")).to_contain_text("navigate_to(kitchen counter): failed")
+    expect(page.locator("#plans")).to_contain_text("navigate_to(kitchen counter): cancelled")
 
 
 def test_cli_estop_latches_and_releases_a_running_server(server) -> None:

@@ -70,13 +70,13 @@ def test_say_command_runs_to_success_with_per_step_status(make_worker) -> None:
     assert wait_event(events, "speech/say").data["text"] == "hello"
 
 
-def test_capstone_fails_honestly_until_walking_exists(make_worker) -> None:
-    worker = make_worker(realtime=False)
+def test_navigation_without_perception_fails_saying_why(make_worker) -> None:
+    worker = make_worker(realtime=False)  # perception off: no lidar, no map
     reply = worker.submit(RunCommand("pick up the red mug from the kitchen counter"))
     assert worker.wait_for(plan_done(reply.command_id), 10.0)
     plan = worker.state().plan
     assert plan.state == PlanState.FAILED
-    assert plan.steps[0].state == StepState.FAILED and "no path planner" in plan.steps[0].detail
+    assert plan.steps[0].state == StepState.FAILED and "perception is off" in plan.steps[0].detail
     assert all(s.state == StepState.SKIPPED for s in plan.steps[1:])
     assert worker.state().held_object is None
 

@@ -1,0 +1,202 @@
+"""`navigate_to`: plan a path on the occupancy map, walk it through the legs' velocity input, replan when the map
+shows it blocked, and finish with a slow, precise approach to the goal pose.
+
+Two goals per place: the *staging* point on open floor in front of it (reached along a planned path, keeping the
+robot's footprint plus a margin clear of everything) and the *approach* pose at the surface (reached from the
+staging point by a short straight walk, where the margin no longer applies). Every failure says why: no path
+("path blocked"), no progress ("stuck"), a fall.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Protocol
+
+from robot.model.world import ROBOT_RADIUS
+from robot.navigation.costmap import Costmap
+from robot.navigation.follower import PathFollower
+from robot.navigation.grid_planner import astar, nearest_free, simplify
+
+CLEARANCE_M = 0.08  # beyond the footprint: a walking robot sways, and its arms reach past its feet
+CONTROL_PERIOD_S = 0.1
+REPLAN_CHECK_S = 0.5
+BLOCKED_WAIT_S = 3.0  # a path found blocked is retried for this long before giving up
+STUCK_S = 20.0
+# Final approach (gains of the closed-loop walking prototype's go-to-pose, shared FINDINGS.md)
+APPROACH_GAIN = (0.8, 0.8, 1.2)
+APPROACH_LIMIT = (0.08, 0.05, 0.4)
+ARRIVED_M = 0.02
+ARRIVED_RAD = math.radians(3.0)
+APPROACH_TIMEOUT_S = 30.0
+
+
+class NavigationFailed(Exception):
+    """A precise reason: 'path blocked ...', 'stuck ...', 'fell ...'."""
+
+
+class NavBody(Protocol):
+    def pose(self) -> tuple[float, float, float]:
+        """Where the robot believes it is, in the map frame: x, y, heading."""
+
+    def costmap(self, inflate_m: float) -> Costmap | None:
+        """The latest map with its obstacles grown by `inflate_m` (None before the first map)."""
+
+    def drive(self, vx: float, vy: float, yaw_rate: float) -> None:
+        """Velocity for the legs, in the robot's frame (a deadman: repeat it every control period)."""
+
+    def wait(self, seconds: float) -> None:
+        """Let this much simulated time pass (raises when the plan is cancelled)."""
+
+    def walking(self) -> bool: ...
+
+    def fallen(self) -> bool: ...
+
+
+@dataclass
+class NavigationReport:
+    walked_m: float = 0.0  # along the planned paths actually followed, plus the final approach
+    replans: int = 0
+    sim_s: float = 0.0
+    final_error_m: float = 0.0
+    final_heading_error_deg: float = 0.0
+    path: tuple[tuple[float, float], ...] = ()
+
+
+def plan_path(costmap: Costmap, start: tuple[float, float], goal: tuple[float, float]) -> list[tuple[float, float]]:
+    """A path of points from start to goal on the costmap (ends moved to the nearest free cells), or raise."""
+    ends = nearest_free(costmap.blocked, costmap.cell(*start)), nearest_free(costmap.blocked, costmap.cell(*goal))
+    if None in ends:
+        raise NavigationFailed(f"path blocked: no free space near ({goal[0]:.2f}, {goal[1]:.2f})")
+    cells = astar(costmap.blocked, *ends)  # type: ignore[arg-type]
+    if cells is None:
+        raise NavigationFailed(f"path blocked: no path to ({goal[0]:.2f}, {goal[1]:.2f}) on the map")
+    points = [start] + [costmap.centre(i, j) for i, j in cells[1:-1]] + [goal]
+    return simplify(points, costmap.blocked_at, costmap.resolution / 2)
+
+
+def _path_blocked(costmap: Costmap, follower: PathFollower) -> bool:
+    """Whether the rest of the path (from the robot's progress on) crosses a blocked cell."""
+    s = follower.progress + 0.15  # the cells right under the robot may be grown over by a nearby obstacle
+    while s < follower.length - 0.1:
+        if costmap.blocked_at(*follower.point_at(s)):
+            return True
+        s += costmap.resolution / 2
+    return False
+
+
+class Navigator:
+    def __init__(self, body: NavBody, sim_time: Callable[[], float]) -> None:
+        self.body = body
+        self._now = sim_time
+
+    def go(self, staging: tuple[float, float], approach: tuple[float, float, float] | None = None) -> NavigationReport:
+        report = NavigationReport()
+        started = self._now()
+        self._follow_path(staging, report)
+        if approach is not None:
+            self._approach(approach, report)
+        x, y, yaw = self.body.pose()
+        goal = approach if approach is not None else (*staging, yaw)
+        report.final_error_m = math.dist((x, y), goal[:2])
+        report.final_heading_error_deg = math.degrees(abs(math.remainder(yaw - goal[2], math.tau)))
+        report.sim_s = self._now() - started
+        return report
+
+    def _costmap(self) -> Costmap:
+        costmap = self.body.costmap(ROBOT_RADIUS + CLEARANCE_M)
+        if costmap is None:
+            raise NavigationFailed("no map yet: the lidar has not produced one")
+        return costmap
+
+    def _follow_path(self, goal: tuple[float, float], report: NavigationReport) -> None:
+        body = self.body
+        x, y, _ = body.pose()
+        path = self._plan_or_wait((x, y), goal)
+        report.path = tuple(path)
+        follower = PathFollower(path)
+        last_check = best_time = self._now()
+        best_remaining = math.inf
+        while True:
+            self._check_fall()
+            x, y, yaw = body.pose()
+            command = follower.update(x, y, yaw)
+            if command.arrived:
+                report.walked_m += follower.progress
+                break
+            now = self._now()
+            if command.remaining_m < best_remaining - 0.05:
+                best_remaining, best_time = command.remaining_m, now
+            elif now - best_time > STUCK_S:
+                self._stop()
+                left = command.remaining_m
+                raise NavigationFailed(f"stuck: no progress for {STUCK_S:.0f} s, {left:.2f} m from the goal")
+            if now - last_check >= REPLAN_CHECK_S:
+                last_check = now
+                if _path_blocked(self._costmap(), follower):
+                    report.walked_m += follower.progress
+                    self._stop()
+                    path = self._plan_or_wait((x, y), goal)
+                    report.replans += 1
+                    report.path = tuple(path)
+                    follower = PathFollower(path)
+                    best_remaining, best_time = math.inf, self._now()
+                    continue
+            body.drive(command.vx, command.vy, command.yaw_rate)
+            body.wait(CONTROL_PERIOD_S)
+        self._stop()
+
+    def _plan_or_wait(self, start: tuple[float, float], goal: tuple[float, float]) -> list[tuple[float, float]]:
+        """A path now, or after waiting a little for the way to clear (a person passing), or raise."""
+        deadline = self._now() + BLOCKED_WAIT_S
+        while True:
+            try:
+                return plan_path(self._costmap(), start, goal)
+            except NavigationFailed:
+                if self._now() >= deadline:
+                    raise
+                self.body.wait(0.5)
+
+    def _approach(self, goal: tuple[float, float, float], report: NavigationReport) -> None:
+        """Walk the last stretch slowly and stop on the goal pose (position first, then heading)."""
+        body = self.body
+        kx, ky, kw = APPROACH_GAIN
+        lx, ly, lw = APPROACH_LIMIT
+        deadline = self._now() + APPROACH_TIMEOUT_S
+        report.walked_m += math.dist(body.pose()[:2], goal[:2])
+        while self._now() < deadline:
+            self._check_fall()
+            x, y, yaw = body.pose()
+            dx, dy = goal[0] - x, goal[1] - y
+            c, s = math.cos(yaw), math.sin(yaw)
+            ex, ey = c * dx + s * dy, -s * dx + c * dy
+            heading_error = math.remainder(goal[2] - yaw, math.tau)
+            if math.hypot(ex, ey) < ARRIVED_M and abs(heading_error) < ARRIVED_RAD:
+                if not body.walking():
+                    return
+                body.drive(0.0, 0.0, 0.0)
+            else:
+                body.drive(_clip(kx * ex, lx), _clip(ky * ey, ly), _clip(kw * heading_error, lw))
+            body.wait(CONTROL_PERIOD_S)
+        self._stop()
+        x, y, yaw = body.pose()
+        error = math.dist((x, y), goal[:2])
+        if error > 3 * ARRIVED_M:
+            raise NavigationFailed(f"stuck: could not settle on the goal pose ({error * 100:.0f} cm off)")
+
+    def _stop(self) -> None:
+        body = self.body
+        for _ in range(100):
+            if not body.walking():
+                return
+            body.drive(0.0, 0.0, 0.0)
+            body.wait(CONTROL_PERIOD_S)
+
+    def _check_fall(self) -> None:
+        if self.body.fallen():
+            raise NavigationFailed("fell while walking")
+
+
+def _clip(value: float, limit: float) -> float:
+    return max(-limit, min(limit, value))
