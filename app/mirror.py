@@ -16,7 +16,7 @@ import numpy as np
 import viser
 from mjviser.scene import ViserMujocoScene
 
-from app.perception_overlay import PerceptionOverlay
+from app.perception_overlay import NavigationOverlay, PerceptionOverlay
 from robot.interface import LocomotionState, RobotPort
 from robot.model import humanoid_v1
 
@@ -153,6 +153,7 @@ class SceneMirror:
                                                    ground_color=(120, 110, 100), intensity=1.6)  # fmt: skip
         self.gait = GaitOverlay(self.server)
         self.perception = PerceptionOverlay(self.server)
+        self.navigation = NavigationOverlay(self.server)
         self.updates = 0
         self._last_qpos: np.ndarray | None = None
         self._stop = threading.Event()
@@ -180,16 +181,21 @@ class SceneMirror:
         state = self._port.state()
         feed = self._port.sensor_feed()
         perceived = self.perception.update(feed.scan, feed.map, state.perception)
+        perceived |= self.navigation.update(state.navigation)
         qpos = np.asarray(state.qpos)
-        if self._last_qpos is not None and np.max(np.abs(qpos - self._last_qpos)) < VISIBLE_CHANGE:
+        scene = np.concatenate([qpos, np.asarray(state.mocap_positions, dtype=float)])  # dropped obstacles too
+        if (self._last_qpos is not None and scene.shape == self._last_qpos.shape
+                and np.max(np.abs(scene - self._last_qpos)) < VISIBLE_CHANGE):  # fmt: skip
             if self.gait.shown and (state.locomotion is None or state.locomotion.com is None):
                 self.gait.update(None)  # the walk ended while the robot stood still: clear its overlay
                 perceived = True
             if perceived:
                 self.server.flush()
             return perceived
-        self._last_qpos = qpos
+        self._last_qpos = scene
         self.data.qpos[:] = qpos
+        if len(state.mocap_positions) == self.data.mocap_pos.size:
+            self.data.mocap_pos[:] = np.asarray(state.mocap_positions).reshape(self.data.mocap_pos.shape)
         mujoco.mj_kinematics(self.model, self.data)
         self.scene.update_from_mjdata(self.data)
         self.gait.update(state.locomotion)

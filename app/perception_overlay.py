@@ -12,7 +12,7 @@ import math
 import numpy as np
 import viser
 
-from robot.interface import KnownObject, OccupancyMap, PerceptionState, ScanView
+from robot.interface import KnownObject, NavigationState, OccupancyMap, PerceptionState, ScanView
 
 SCAN_COLOUR = (230, 30, 30)
 OBJECT_COLOUR = (255, 200, 0)
@@ -117,3 +117,40 @@ class PerceptionOverlay:
             self._objects[obj.name] = (box, label, obj)
             changed = True
         return changed
+
+
+PATH_COLOUR = (40, 200, 120)
+GOAL_COLOUR = (40, 200, 120)
+PATH_Z = 0.01
+
+
+class NavigationOverlay:
+    """The path `navigate_to` follows (a green line on the floor) and its goal pose (an arrow-like box)."""
+
+    def __init__(self, server: viser.ViserServer) -> None:
+        self._scene = server.scene
+        self._path: viser.LineSegmentsHandle | None = None
+        self._goal = self._scene.add_box("/navigation/goal", GOAL_COLOUR, (0.12, 0.03, 0.01), cast_shadow=False,
+                                         receive_shadow=False, visible=False)  # fmt: skip
+        self._drawn: NavigationState | None = None
+
+    def update(self, navigation: NavigationState | None) -> bool:
+        if navigation == self._drawn:
+            return False
+        self._drawn = navigation
+        if self._path is not None:
+            self._path.remove()
+            self._path = None
+        if navigation is None:
+            self._goal.visible = False
+            return True
+        points = np.array([(x, y, PATH_Z) for x, y in navigation.path], dtype=np.float32)
+        if len(points) >= 2:
+            segments = np.stack([points[:-1], points[1:]], axis=1)
+            self._path = self._scene.add_line_segments("/navigation/path", segments, PATH_COLOUR, thickness=4.0,
+                                                       thickness_units="screen")  # fmt: skip
+        x, y, heading = navigation.goal
+        self._goal.position = (x + 0.06 * math.cos(heading), y + 0.06 * math.sin(heading), PATH_Z)
+        self._goal.wxyz = (math.cos(heading / 2), 0.0, 0.0, math.sin(heading / 2))
+        self._goal.visible = True
+        return True

@@ -29,6 +29,7 @@ def state_json(state: RobotState, include_qpos: bool = False) -> dict[str, Any]:
         "locomotion": dataclasses.asdict(state.locomotion) if state.locomotion is not None else None,
         "perception": dataclasses.asdict(state.perception) if state.perception is not None else None,
         "proprioception": dataclasses.asdict(state.proprioception) if state.proprioception is not None else None,
+        "navigation": dataclasses.asdict(state.navigation) if state.navigation is not None else None,
     }
     if include_qpos:
         out["qpos"] = list(state.qpos)

@@ -156,12 +156,20 @@ class SetPosture:
 
 
 @dataclass(frozen=True)
+class PlaceObstacle:
+    """Simulation only: drop a 14 x 14 x 30 cm box at (x, y) in the world, e.g. across the robot's path."""
+
+    x: float
+    y: float
+
+
+@dataclass(frozen=True)
 class ResetRobot:
     """Simulation only: put the robot back standing at its start pose (after a fall, or to start over)."""
 
 
 PlanCommand = RunCommand | ExecutePlan | Replan | CancelPlan
-MotionCommand = Teleop | StopTeleop | SetPosture | ResetRobot
+MotionCommand = Teleop | StopTeleop | SetPosture | ResetRobot | PlaceObstacle
 Command = PlanCommand | MotionCommand | EStop | ReleaseEStop
 
 
@@ -350,6 +358,16 @@ class SensorFeed:
 
 
 @dataclass(frozen=True)
+class NavigationState:
+    """The walk a `navigate_to` step is making: where to, along which path (map frame), how often replanned."""
+
+    goal: tuple[float, float, float]  # x, y, heading
+    path: tuple[tuple[float, float], ...]
+    replans: int = 0
+    phase: str = "following"  # following | approaching | arrived
+
+
+@dataclass(frozen=True)
 class RobotState:
     """An immutable snapshot published by the control loop."""
 
@@ -369,6 +387,8 @@ class RobotState:
     locomotion: LocomotionState | None = None
     perception: PerceptionState | None = None
     proprioception: Proprioception | None = None
+    mocap_positions: tuple[float, ...] = ()  # kinematic bodies of the scene (x, y, z each), beside qpos
+    navigation: NavigationState | None = None
 
 
 @dataclass(frozen=True)

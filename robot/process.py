@@ -31,6 +31,7 @@ from robot.interface import (
     CommandReply,
     EStop,
     Event,
+    PlaceObstacle,
     Refusal,
     ReleaseEStop,
     ResetRobot,
@@ -49,7 +50,7 @@ STATE_PERIOD_S = 0.01  # state snapshots sent to the parent at up to 100 Hz
 REPLY_TIMEOUT_S = 30.0  # planning may take a while (an LLM); the e-stop never waits behind it
 STARTUP_TIMEOUT_S = 180.0
 # Commands that must never queue behind a slow one: handled inline by the child's receiving thread.
-_IMMEDIATE = (EStop, ReleaseEStop, CancelPlan, Teleop, StopTeleop, SetPosture, ResetRobot)
+_IMMEDIATE = (EStop, ReleaseEStop, CancelPlan, Teleop, StopTeleop, SetPosture, ResetRobot, PlaceObstacle)
 
 
 class WorkerProcess:

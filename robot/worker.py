@@ -43,8 +43,10 @@ from robot.interface import (
     Level,
     LocomotionState,
     Mode,
+    NavigationState,
     ObjectPose,
     PerceptionState,
+    PlaceObstacle,
     Plan,
     PlanState,
     PlanStatus,
@@ -164,6 +166,8 @@ class RobotWorker:
         self._teleop_deadline: float | None = None
         self._stop_promptly = False  # operator let go: stop without first walking off the pose loop's lag
         self._reset_pending = False
+        self._obstacles_pending: list[tuple[float, float]] = []
+        self._navigation: NavigationState | None = None
         self._head = HeadController(start=(float(self._stand[_HEAD_PAN]), float(self._stand[_HEAD_TILT])))
         self._task_velocity = Velocity()  # what a running plan step asks the legs for (turning to look)
         self._perception = (
@@ -243,6 +247,8 @@ class RobotWorker:
             return self._set_posture(command.posture)
         if isinstance(command, ResetRobot):
             return self._reset_robot()
+        if isinstance(command, PlaceObstacle):
+            return self._place_obstacle(command)
         return CommandReply(False, f"unknown command type {type(command).__name__}", Refusal.INVALID)
 
     def state(self) -> RobotState:
@@ -290,11 +296,13 @@ class RobotWorker:
             raise StepFailed(f"unknown place {args['target']!r}")
         self._head.point(0.0, DEFAULT_TILT)  # look ahead and down while walking
         try:
-            report = Navigator(_NavBody(self, ctx), lambda: self._sim_time).go(place.staging, place.approach)
+            navigator = Navigator(_NavBody(self, ctx), lambda: self._sim_time, self._set_navigation)
+            report = navigator.go(place.staging, place.approach)
         except NavigationFailed as exc:
             raise StepFailed(str(exc)) from exc
         finally:
             self._set_task_velocity(Velocity())
+            self._set_navigation(None)
         replans = f", {report.replans} replan{'s' if report.replans != 1 else ''}" if report.replans else ""
         self._bus.publish("navigation/arrived", f"at the {place.name}", place=place.name, walked_m=report.walked_m,
                           replans=report.replans, error_m=report.final_error_m, sim_s=report.sim_s,
@@ -335,6 +343,10 @@ class RobotWorker:
             if p.name == place and p.surface is not None:
                 return (p.surface.x, p.surface.y, p.surface.height)
         return None
+
+    def _set_navigation(self, navigation: NavigationState | None) -> None:
+        with self._lock:
+            self._navigation = navigation
 
     def _set_task_velocity(self, velocity: Velocity) -> None:
         with self._lock:
@@ -621,6 +633,26 @@ class RobotWorker:
         self._wake.set()
         return CommandReply(True, "resetting the robot to standing at its start pose")
 
+    def _place_obstacle(self, command: PlaceObstacle) -> CommandReply:
+        if not hasattr(self.backend, "place_obstacle"):
+            return CommandReply(False, "obstacles can only be placed in simulation", Refusal.UNSUPPORTED)
+        if not all(math.isfinite(v) and abs(v) < 50 for v in (command.x, command.y)):
+            return CommandReply(False, "obstacle position must be finite and within 50 m", Refusal.INVALID)
+        with self._lock:
+            self._obstacles_pending.append((command.x, command.y))
+        return CommandReply(True, f"placing an obstacle at ({command.x:.2f}, {command.y:.2f})")
+
+    def _apply_pending_obstacles(self) -> None:
+        with self._lock:
+            pending, self._obstacles_pending = self._obstacles_pending, []
+        for x, y in pending:
+            try:
+                index = self.backend.place_obstacle(x, y)
+            except ValueError as exc:
+                self._bus.publish("sim/obstacle", f"no obstacle placed: {exc}", Level.WARN)
+                continue
+            self._bus.publish("sim/obstacle", f"obstacle {index} dropped at ({x:.2f}, {y:.2f})", x=x, y=y)
+
     def _apply_pending_reset(self) -> None:
         """Control thread: the robot stands again at its start pose, as after start-up."""
         with self._lock:
@@ -742,6 +774,7 @@ class RobotWorker:
         """One control period: targets out, physics (or the servos) forward, measurements in, state published."""
         self._apply_pending_estop()
         self._apply_pending_reset()
+        self._apply_pending_obstacles()
         self._targets = self._control_targets(self._measured)
         with self._lock:
             fallen = self._fallen
@@ -837,6 +870,8 @@ class RobotWorker:
                 tilt_deg=measured.tilt_deg,
                 fallen=measured.fallen,
                 qpos=tuple(self.backend.qpos().tolist()),
+                mocap_positions=tuple(self.backend.mocap_positions().ravel().tolist()),
+                navigation=self._navigation,
                 objects=tuple(ObjectPose(n, p) for n, p in self.backend.object_positions().items()),
                 held_object=self._held_object,
                 plan=plan_status,
@@ -926,8 +961,13 @@ class _TaskBody:
                     break
                 direction = math.copysign(1.0, remaining)
                 worker._set_task_velocity(Velocity(0.0, 0.0, direction * rate))
+                # a turn that takes three times as long as it should is blocked (an arm against furniture)
+                deadline = worker._sim_time + 3.0 * abs(remaining) / rate + 3.0
                 # stop early by about what the two stopping steps still turn
                 while direction * (angle - turned) > rate * 0.3:
+                    if worker._sim_time > deadline:
+                        raise StepFailed(f"could not turn in place: turned {math.degrees(turned):.0f} of "
+                                         f"{math.degrees(angle):.0f} deg (blocked?)")  # fmt: skip
                     self._ctx.wait_sim(0.02)
                     yaw = yaw_of(worker._map_trunk()[1])
                     turned += _wrap(yaw - last)

@@ -15,6 +15,7 @@ from robot.interface import (
     CancelPlan,
     EStop,
     ExecutePlan,
+    PlaceObstacle,
     Posture,
     ReleaseEStop,
     Replan,
@@ -167,6 +168,22 @@ def teleop_stop(rt: RuntimeDep) -> dict[str, Any]:
 def posture(body: PostureIn, rt: RuntimeDep) -> dict[str, Any]:
     """Stand (the walk-ready stance) or crouch; 409 while walking, running a plan, or under e-stop."""
     reply = rt.worker.submit(SetPosture(body.posture))
+    raise_if_refused(reply)
+    return reply_json(reply)
+
+
+class ObstacleIn(BaseModel):
+    """Where to drop a 14 x 14 x 30 cm box (world frame, m)."""
+
+    model_config = ConfigDict(extra="forbid")
+    x: float = Field(..., allow_inf_nan=False, ge=-50, le=50)
+    y: float = Field(..., allow_inf_nan=False, ge=-50, le=50)
+
+
+@router.post("/sim/obstacles", status_code=202)
+def place_obstacle(body: ObstacleIn, rt: RuntimeDep) -> dict[str, Any]:
+    """Simulation: drop an obstacle into the world (e.g. across the robot's path, to see it replan)."""
+    reply = rt.worker.submit(PlaceObstacle(body.x, body.y))
     raise_if_refused(reply)
     return reply_json(reply)
 

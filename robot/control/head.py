@@ -52,7 +52,7 @@ class HeadController:
     def angles_to_look_at(self, trunk_position: np.ndarray, trunk_rotation: np.ndarray,
                           target: np.ndarray) -> tuple[float, float, bool]:  # fmt: skip
         """Pan and tilt that centre `target` (world) in the camera, for a trunk at this pose; and whether it is
-        within the head's reach (False: turn the body)."""
+        within the head's reach (False: turn the body, or look from where the head is)."""
         local = trunk_rotation.T @ (np.asarray(target, dtype=float) - trunk_position)
         rel = local - self._pan_axis
         pan = math.atan2(rel[1], rel[0])

@@ -10,6 +10,17 @@ from robot.model import humanoid_v1, op3
 from robot.model.world import ROOM_X, ROOM_Y, Box, WorldLayout, WorldObject
 
 PHYSICS_TIMESTEP_S = 0.002  # 500 Hz
+# Obstacles an operator (or a test) can drop into the apartment while the robot works: kinematic boxes parked far
+# outside until placed.
+SPARE_OBSTACLES = 2
+SPARE_OBSTACLE_HALF = (0.07, 0.07, 0.15)
+SPARE_PARKING = (20.0, 20.0)
+
+
+def spare_obstacle_name(index: int) -> str:
+    return f"spare_obstacle_{index}"
+
+
 # Elliptic cones with impratio 10 stop small objects creeping in a grasp (shared FINDINGS.md).
 IMPRATIO = 10.0
 
@@ -89,6 +100,10 @@ def build_scene_spec(layout: WorldLayout) -> mujoco.MjSpec:
         _add_box(world, box)
     for obj in layout.objects:
         _add_object(spec, obj)
+    for i in range(SPARE_OBSTACLES):
+        body = world.add_body(name=spare_obstacle_name(i), mocap=True,
+                              pos=[SPARE_PARKING[0] + i, SPARE_PARKING[1], SPARE_OBSTACLE_HALF[2]])  # fmt: skip
+        body.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=list(SPARE_OBSTACLE_HALF), rgba=[0.8, 0.3, 0.6, 1.0])
 
     x, y, yaw = layout.robot_start
     trunk = spec.body(op3.TRUNK_BODY)

@@ -14,6 +14,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol
 
+from robot.interface import NavigationState
 from robot.model.world import ROBOT_RADIUS
 from robot.navigation.costmap import Costmap
 from robot.navigation.follower import PathFollower
@@ -87,16 +88,22 @@ def _path_blocked(costmap: Costmap, follower: PathFollower) -> bool:
 
 
 class Navigator:
-    def __init__(self, body: NavBody, sim_time: Callable[[], float]) -> None:
+    def __init__(self, body: NavBody, sim_time: Callable[[], float],
+                 on_update: Callable[[NavigationState], None] | None = None) -> None:  # fmt: skip
         self.body = body
         self._now = sim_time
+        self._on_update = on_update or (lambda state: None)
+        self._goal: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def go(self, staging: tuple[float, float], approach: tuple[float, float, float] | None = None) -> NavigationReport:
         report = NavigationReport()
         started = self._now()
+        self._goal = approach if approach is not None else (*staging, self.body.pose()[2])
         self._follow_path(staging, report)
         if approach is not None:
+            self._on_update(NavigationState(self._goal, report.path, report.replans, "approaching"))
             self._approach(approach, report)
+        self._on_update(NavigationState(self._goal, report.path, report.replans, "arrived"))
         x, y, yaw = self.body.pose()
         goal = approach if approach is not None else (*staging, yaw)
         report.final_error_m = math.dist((x, y), goal[:2])
@@ -115,6 +122,7 @@ class Navigator:
         x, y, _ = body.pose()
         path = self._plan_or_wait((x, y), goal)
         report.path = tuple(path)
+        self._on_update(NavigationState(self._goal, report.path, report.replans))
         follower = PathFollower(path)
         last_check = best_time = self._now()
         best_remaining = math.inf
@@ -140,6 +148,7 @@ class Navigator:
                     path = self._plan_or_wait((x, y), goal)
                     report.replans += 1
                     report.path = tuple(path)
+                    self._on_update(NavigationState(self._goal, report.path, report.replans))
                     follower = PathFollower(path)
                     best_remaining, best_time = math.inf, self._now()
                     continue

@@ -21,6 +21,8 @@ from robot.perception.geometry import MUJOCO_TO_OPTICAL, PinholeIntrinsics, tran
 # Depth beyond this is reported as no return (the D435's useful range), as is the empty sky.
 MAX_DEPTH_M = 6.0
 MIN_DEPTH_M = 0.1
+NEAR_PLANE_M = 0.02
+FAR_PLANE_M = 50.0
 # Depth noise grows with the square of the distance, as a stereo camera's: sigma = this x z^2 (1 mm at 1 m).
 DEPTH_NOISE_PER_M2 = 0.001
 # What the camera sees: the world (0), the gripper (1) and the robot's convex shapes (3); not the meshes (2).
@@ -48,6 +50,10 @@ class SimRGBDCamera:
         seed: int = 0,
     ) -> None:
         model.vis.quality.offsamples = 0
+        # MuJoCo's clipping planes scale with the model's extent (far-parked spare obstacles make it 30 m, and the
+        # near plane then cut off everything within 0.3 m): set them in metres instead
+        model.vis.map.znear = NEAR_PLANE_M / model.stat.extent
+        model.vis.map.zfar = FAR_PLANE_M / model.stat.extent
         model.vis.global_.offwidth = max(model.vis.global_.offwidth, width)
         model.vis.global_.offheight = max(model.vis.global_.offheight, height)
         self._model = model

@@ -115,11 +115,17 @@ class PerceptionService:
         are still starting), so sensors run at their rate in simulated time however fast the simulation goes."""
         deadline = time.monotonic() + timeout_s
         with self._cond:
-            while not self._stop.is_set() and time.monotonic() < deadline:
+            while not self._stop.is_set():
                 starting = self._state.status == "starting"
                 if not starting and (self._state.status != "ok" or sim_time_s < self._next_time + self._period):
                     return
+                if time.monotonic() >= deadline:
+                    break
                 self._cond.wait(0.05)
+            else:
+                return
+        # sensing hangs: say so and let the robot go on without it, rather than stall the simulation for good
+        self._fail(f"the sensors did not answer for {timeout_s:.0f} s: perception stopped")
 
     def clear_map(self) -> None:
         """Forget the map (the robot was moved by hand, or the world changed); the next scan starts a new one."""
@@ -163,7 +169,8 @@ class PerceptionService:
                 trunk = np.asarray(loco.estimated_trunk, dtype=float)
                 # a fallen robot's pose estimate means nothing: no mapping until it stands again
                 snapshot = SensorSnapshot(state.sim_time_s, np.asarray(state.qpos, dtype=float), trunk[:3], trunk[3:],
-                                          lidar=not state.fallen)  # fmt: skip
+                                          lidar=not state.fallen,
+                                          mocap_positions=np.asarray(state.mocap_positions, dtype=float))  # fmt: skip
                 self._absorb(runner.process(snapshot))
         except SensorError as exc:
             self._fail(str(exc))

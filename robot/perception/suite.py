@@ -39,6 +39,7 @@ class SensorSnapshot:
     trunk_quat: np.ndarray  # (4,) wxyz, estimated
     camera: bool = True
     lidar: bool = True
+    mocap_positions: np.ndarray | None = None  # (n, 3) kinematic bodies (dropped obstacles)
 
 
 @dataclass(frozen=True)
@@ -89,6 +90,8 @@ class SensorSuite:
     def process(self, snapshot: SensorSnapshot) -> SensorOutput:
         data = self.data
         data.qpos[:] = snapshot.qpos
+        if snapshot.mocap_positions is not None and snapshot.mocap_positions.size == data.mocap_pos.size:
+            data.mocap_pos[:] = snapshot.mocap_positions.reshape(data.mocap_pos.shape)
         data.time = snapshot.sim_time_s
         mujoco.mj_kinematics(self.model, data)
         mujoco.mj_camlight(self.model, data)

@@ -12,7 +12,14 @@ import mujoco
 import numpy as np
 
 from robot.model import humanoid_v1
-from robot.model.scene import build_scene, object_body_name
+from robot.model.scene import (
+    SPARE_OBSTACLE_HALF,
+    SPARE_OBSTACLES,
+    SPARE_PARKING,
+    build_scene,
+    object_body_name,
+    spare_obstacle_name,
+)
 from robot.model.world import WorldLayout
 
 # A biped is considered fallen beyond this trunk tilt or below this trunk height.
@@ -70,7 +77,20 @@ class MujocoSimBackend:
         self._imu_quat = self._sensor_slice("imu_quat")
         self._accel = self._sensor_slice("imu_accel")
         self._fsr = [self._sensor_slice(f"{side}_foot_fsr{i}") for side in ("left", "right") for i in range(4)]
+        self._spares = [int(self.model.body_mocapid[self.model.body(spare_obstacle_name(i)).id])
+                        for i in range(SPARE_OBSTACLES)]  # fmt: skip
+        self._spares_placed = 0
         self.reset()
+
+    def place_obstacle(self, x: float, y: float) -> int:
+        """Drop one of the spare obstacles (a 14 x 14 x 30 cm box) at (x, y); returns which, or raises when all are
+        placed already."""
+        if self._spares_placed >= len(self._spares):
+            raise ValueError(f"all {len(self._spares)} spare obstacles are placed already (reset to take them back)")
+        index = self._spares_placed
+        self.data.mocap_pos[self._spares[index]] = (x, y, SPARE_OBSTACLE_HALF[2])
+        self._spares_placed += 1
+        return index
 
     def _sensor_slice(self, name: str) -> slice:
         sensor = self.model.sensor(name)
@@ -88,6 +108,9 @@ class MujocoSimBackend:
         """Robot standing at its start pose in `posture` (default: the model's), soles on the floor; objects where
         the layout puts them."""
         mujoco.mj_resetData(self.model, self.data)
+        for i, mocap in enumerate(getattr(self, "_spares", [])):
+            self.data.mocap_pos[mocap] = (SPARE_PARKING[0] + i, SPARE_PARKING[1], SPARE_OBSTACLE_HALF[2])
+        self._spares_placed = 0
         stand = self.stand_targets() if posture is None else np.asarray(posture, dtype=float)
         self.data.qpos[self._joint_qpos] = stand
         self.data.ctrl[self._actuator] = stand
@@ -127,6 +150,10 @@ class MujocoSimBackend:
 
     def qpos(self) -> np.ndarray:
         return self.data.qpos.copy()
+
+    def mocap_positions(self) -> np.ndarray:
+        """(n, 3) positions of the kinematic bodies (the spare obstacles): part of the scene beside qpos."""
+        return self.data.mocap_pos.copy()
 
     def object_positions(self) -> dict[str, tuple[float, float, float]]:
         return {name: tuple(float(v) for v in self.data.xpos[b]) for name, b in self._object_bodies.items()}

@@ -189,3 +189,13 @@ def test_scan_matching_takes_out_odometry_drift() -> None:
         assert abs(out.correction.x) < 0.01 and abs(out.correction.y) < 0.01
     finally:
         suite.close()
+
+
+def test_the_mug_is_found_from_where_the_robot_stands_to_grasp_it(suite: SensorSuite) -> None:
+    """At the counter's approach pose the mug is 15-20 cm from the camera: nothing may clip it away (MuJoCo's near
+    plane scales with the scene's size, and far-parked spare obstacles once pushed it to 0.3 m)."""
+    approach = next(p for p in suite.layout.places if p.name == "kitchen counter").approach
+    out = _sense(suite, _qpos(suite, approach[0], approach[1], approach[2], tilt=-0.7), lidar=False)
+    mug = next(d for d in out.camera.detections if d.label == "red mug")
+    assert mug.distance_m < 0.3
+    assert np.linalg.norm(np.asarray(mug.position) - _truth(suite, "red mug")) < 0.015
