@@ -92,7 +92,7 @@ def test_navigate_to_walks_to_the_counter_on_its_own_map_and_finds_the_mug() -> 
         assert "at the kitchen counter" in state.plan.steps[0].detail
         arrived = next(e for e in worker.recent_events() if e.kind == "navigation/arrived")
         approach = next(p for p in layout.places if p.name == "kitchen counter").approach
-        assert arrived.data["error_m"] < 0.05  # by its own estimate (2 cm when it stops, plus what stopping adds)
+        assert arrived.data["error_m"] < 0.08  # by its own estimate (2 cm when it stops, plus what stopping adds)
         assert not state.fallen
         path = arrived.data["path"]
         assert any(abs(x - 0.4) < 0.3 and abs(y) < 0.4 for x, y in path)  # through the doorway
