@@ -820,8 +820,9 @@ class RobotWorker:
             self._loco.stop(promptly=True)
         targets = self._loco.update(sensors(measured), self._posture.goal)
         if not self._loco.moving:
-            self._posture.hold(self._stand)
-            with self._lock:
+            with self._lock:  # a posture command may have just arrived: holding the stance must not undo it
+                if self._posture_name == Posture.STAND:
+                    self._posture.hold(self._stand)
                 ended = self._teleop_active and self._teleop_deadline is None
                 if ended:
                     self._teleop_active = False
