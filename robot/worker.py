@@ -666,7 +666,7 @@ class RobotWorker:
         self._loco.halt()
         self._head.reset(start=(float(self._stand[_HEAD_PAN]), float(self._stand[_HEAD_TILT])))
         if self._perception is not None:  # objects are back where the world puts them; odometry starts over
-            self._perception.memory.clear()
+            self._perception.forget_objects()
             self._perception.clear_map()
         self.backend.reset(self._stand)
         self._posture.hold(self._stand)

@@ -97,8 +97,14 @@ class PerceptionService:
             self._thread = None
 
     def state(self) -> PerceptionState:
+        """The latest perception state (built when it changes: the control loop reads it every tick)."""
         with self._cond:
-            return replace(self._state, known_objects=self.memory.snapshot())
+            return self._state
+
+    def forget_objects(self) -> None:
+        """Clear the world memory (the objects were put back where the world starts them)."""
+        self.memory.clear()
+        self._set(known_objects=())
 
     def localise(self, x: float, y: float, yaw: float) -> tuple[float, float, float]:
         """An odometry pose in the map frame (scan matching's latest correction applied)."""
@@ -188,7 +194,9 @@ class PerceptionService:
             self._camera_rate.tick(frame.sim_time_s)
             feed = replace(feed, camera=CameraImage(frame.seq, frame.sim_time_s, frame.width, frame.height,
                                                     frame.jpeg, detections))  # fmt: skip
-            for known in self.memory.observe(detections, frame.sim_time_s):
+            changed = self.memory.observe(detections, frame.sim_time_s)
+            updates["known_objects"] = self.memory.snapshot()
+            for known in changed:
                 where = f" on the {known.place}" if known.place and known.place != "floor" else ""
                 x, y, z = known.position
                 self._publish("perception/object_seen", f"saw the {known.name} at ({x:.2f}, {y:.2f}, {z:.2f}){where}",
