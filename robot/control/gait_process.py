@@ -8,14 +8,13 @@ segments are pickled over a pair of pipes; the child exits when its request pipe
 
 from __future__ import annotations
 
-import contextlib
 import os
 import pickle
-import subprocess
 import sys
 import time
 from pathlib import Path
 
+from robot.child_process import PipedChild
 from robot.control.gait import GaitPlannerCore, GaitSegment, StepCommand
 
 
@@ -55,37 +54,25 @@ class ProcessGaitPlanner:
     """Plans in a child process; at most one request is outstanding at a time."""
 
     def __init__(self, model_path: Path, dt: float) -> None:
-        request_read, self._request_write = os.pipe()
-        self._answer_read, answer_write = os.pipe()
-        self._process = subprocess.Popen(
-            [sys.executable, "-m", "robot.control.gait_process", str(model_path), str(dt),
-             str(request_read), str(answer_write)],
-            pass_fds=(request_read, answer_write),
-            stdin=subprocess.DEVNULL,
-            stdout=subprocess.DEVNULL,  # placo prints to stdout from C++
-        )  # fmt: skip
-        os.close(request_read)
-        os.close(answer_write)
-        self._requests = os.fdopen(self._request_write, "wb")
-        self._answers = os.fdopen(self._answer_read, "rb")
+        # quiet: placo prints to stdout from C++
+        self._child = PipedChild("robot.control.gait_process", str(model_path), str(dt), quiet=True)
         self._outstanding = 0
         self.last_wait_ms = 0.0  # how long the last result() blocked (in real time it never should)
-        ready = pickle.load(self._answers)
+        ready = self._child.receive()
         if ready != "ready":
             raise GaitPlannerError(f"gait planner failed to start: {ready}")
 
     def request(self, kind: str, command: StepCommand, t: float) -> None:
         if self._outstanding:
             raise GaitPlannerError("a gait request is already outstanding")
-        pickle.dump((kind, command, t), self._requests)
-        self._requests.flush()
+        self._child.send((kind, command, t))
         self._outstanding = 1
 
     def result(self, block: bool) -> GaitSegment | None:
         if not self._outstanding:
             return None
         started = time.perf_counter()
-        answer = pickle.load(self._answers)  # a pipe read; only ever called once the answer is due
+        answer = self._child.receive()  # a pipe read; only ever called once the answer is due
         self.last_wait_ms = (time.perf_counter() - started) * 1e3
         self._outstanding = 0
         if isinstance(answer, BaseException):
@@ -93,13 +80,7 @@ class ProcessGaitPlanner:
         return answer
 
     def close(self) -> None:
-        with contextlib.suppress(OSError):
-            self._requests.close()
-        try:
-            self._process.wait(timeout=5)
-        except subprocess.TimeoutExpired:
-            self._process.kill()
-        self._answers.close()
+        self._child.close()
 
 
 def _serve(model_path: str, dt: str, request_fd: str, answer_fd: str) -> None:

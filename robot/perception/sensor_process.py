@@ -11,10 +11,10 @@ from __future__ import annotations
 import contextlib
 import os
 import pickle
-import subprocess
 import sys
 from typing import Protocol
 
+from robot.child_process import PipedChild
 from robot.model.world import WorldLayout
 from robot.perception.occupancy import OccupancyGrid
 from robot.perception.suite import SensorOutput, SensorSnapshot, SensorSuite
@@ -54,26 +54,15 @@ class ProcessSensors:
     """The suite in a child process; one request at a time, answered in order."""
 
     def __init__(self, layout: WorldLayout) -> None:
-        request_read, request_write = os.pipe()
-        answer_read, answer_write = os.pipe()
-        self._process = subprocess.Popen(
-            [sys.executable, "-m", "robot.perception.sensor_process", str(request_read), str(answer_write)],
-            pass_fds=(request_read, answer_write),
-            stdin=subprocess.DEVNULL,
-        )
-        os.close(request_read)
-        os.close(answer_write)
-        self._requests = os.fdopen(request_write, "wb")
-        self._answers = os.fdopen(answer_read, "rb")
+        self._child = PipedChild("robot.perception.sensor_process")
         self._call(("start", layout))
 
     def _call(self, request: tuple[object, ...]) -> object:
         try:
-            pickle.dump(request, self._requests)
-            self._requests.flush()
-            answer = pickle.load(self._answers)
+            self._child.send(request)
+            answer = self._child.receive()
         except (OSError, EOFError) as exc:
-            raise SensorError(f"the sensor process is gone (exit code {self._process.poll()})") from exc
+            raise SensorError(f"the sensor process is gone (exit code {self._child.process.poll()})") from exc
         if isinstance(answer, BaseException):
             raise SensorError(f"sensing failed: {answer!r}") from answer
         return answer
@@ -89,13 +78,7 @@ class ProcessSensors:
         return answer
 
     def close(self) -> None:
-        with contextlib.suppress(OSError):
-            self._requests.close()
-        try:
-            self._process.wait(timeout=5)
-        except subprocess.TimeoutExpired:
-            self._process.kill()
-        self._answers.close()
+        self._child.close()
 
 
 def _lower_priority() -> None:
