@@ -120,7 +120,7 @@ def test_planner_in_a_child_process_answers_like_the_inline_one(model_path) -> N
         assert child.result(block=False) is None  # nothing outstanding
     finally:
         child.close()
-    assert child._process.returncode == 0  # it exits when its pipe closes
+    assert child._child.process.returncode == 0  # it exits when its pipe closes
 
 
 def test_walking_controller_walks_the_kinematic_model_and_stops(model_path) -> None:
