@@ -112,7 +112,7 @@ def build_parser() -> argparse.ArgumentParser:
     db_sub.add_parser("upgrade", help="apply pending migrations").set_defaults(func=_db)
 
     bench = sub.add_parser("bench", help="benchmarks, written as JSON")
-    bench.add_argument("suite", choices=["core", "walk", "perception"])
+    bench.add_argument("suite", choices=["core", "walk", "perception", "capstone"])
     bench.add_argument("--json", action="store_true", help="print the JSON result")
     bench.add_argument("--output", default=None, help="also write the JSON result to this file")
     bench.add_argument("--presses", type=int, default=100, help="e-stop presses to time")
@@ -125,7 +125,16 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--seed", type=int, default=0, help="walk, perception: first seed")
     bench.add_argument("--realtime-duration", type=float, default=30.0,
                        help="walk, perception: seconds of real-time walking for the tick and rate figures")  # fmt: skip
-    bench.add_argument("--seeds", type=int, default=50, help="perception: worlds to place the robot in")
+    bench.add_argument(
+        "--seeds",
+        type=int,
+        default=None,
+        help="perception: worlds to place the robot in (50); capstone: worlds per task (30)",
+    )
+    bench.add_argument(
+        "--tasks", default="pick,bring,blocked", help="capstone: which tasks (pick, bring, blocked), comma-separated"
+    )
+    bench.add_argument("--jobs", type=int, default=1, help="capstone: runs at once (1 measures wall time fairly)")
     bench.add_argument("--views", type=int, default=6, help="perception: viewpoints per world")
     bench.add_argument("--tours", type=int, default=5, help="perception: mapping tours (one world each)")
     bench.set_defaults(func=_bench)

@@ -16,6 +16,8 @@ import numpy as np
 import viser
 from mjviser.scene import ViserMujocoScene
 
+from app.click_goal import HINT as CLICK_HINT
+from app.click_goal import ClickToGo
 from app.perception_overlay import NavigationOverlay, PerceptionOverlay
 from robot.interface import LocomotionState, RobotPort
 from robot.model import humanoid_v1
@@ -154,6 +156,8 @@ class SceneMirror:
         self.gait = GaitOverlay(self.server)
         self.perception = PerceptionOverlay(self.server)
         self.navigation = NavigationOverlay(self.server)
+        self.click_to_go = ClickToGo(self.server, port)
+        self.server.gui.add_markdown(CLICK_HINT)
         self.updates = 0
         self._last_qpos: np.ndarray | None = None
         self._stop = threading.Event()

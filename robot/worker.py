@@ -24,18 +24,19 @@ from typing import Any
 
 import numpy as np
 
+from robot.control.gait import write_placo_model
 from robot.control.head import DEFAULT_TILT, HeadController
 from robot.control.locomotion import LocomotionController, Velocity, clip_velocity
 from robot.control.posture import PostureController
 from robot.control.priority import raise_thread_priority
 from robot.control.stack import build_locomotion, measured_pose, sensors
 from robot.control.stats import LoopStats
+from robot.control.whole_body import UPPER_BODY_JOINTS
 from robot.events import EventBus, Subscription
 from robot.interface import (
     CancelPlan,
     Command,
     CommandReply,
-    DetectedObject,
     EStop,
     Event,
     ExecutePlan,
@@ -61,15 +62,22 @@ from robot.interface import (
     RunCommand,
     SensorFeed,
     SetPosture,
+    Step,
     StepState,
     StepStatus,
     StopTeleop,
     Teleop,
 )
+from robot.manipulation.arm_motion import ArmMotion
+from robot.manipulation.grasp_plan import grasp_stance
+from robot.manipulation.pick import PickFailed, pick
+from robot.manipulation.place import PlaceFailed, choose_spot
+from robot.manipulation.place import place as place_held
+from robot.manipulation.reach_ik import ReachIK
 from robot.model import humanoid_v1
 from robot.model.scene import scene_xml
-from robot.model.world import WorldLayout
-from robot.navigation.costmap import Costmap
+from robot.model.world import ROBOT_RADIUS, Place, WorldLayout
+from robot.navigation.goal import parse_pose_goal
 from robot.navigation.navigator import NavigationFailed, Navigator
 from robot.perception.geometry import matrix_to_quat_wxyz, yaw_of
 from robot.perception.search import ObjectNotFound, find_object
@@ -89,17 +97,13 @@ from robot.planning.validator import validate_plan, validate_plan_json
 from robot.planning.world_context import WorldContext
 from robot.sim.backend import Measurements, MujocoSimBackend
 from robot.state_board import StateBoard
+from robot.task_bodies import ArmBody, NavBodyOfWorker, TaskBody
 
 MAX_COMMAND_CHARS = 500
 # When the loop falls this many ticks behind, it stops trying to catch up (sim time would race wall time).
 MAX_TICKS_BEHIND = 5
 # Deadman: teleop motion stops when no teleop command has arrived for this long (s).
 TELEOP_TIMEOUT_S = 0.3
-# Turning in place for a task (looking for an object, facing a point).
-TURN_RATE_RAD_S = 0.5
-TURN_TOLERANCE_RAD = 0.12
-# After the head reaches its target, the image is steady after this long (s).
-HEAD_SETTLE_S = 0.15
 
 
 def _step_summary(steps: tuple[StepStatus, ...]) -> list[dict[str, str]]:
@@ -170,6 +174,9 @@ class RobotWorker:
         self._navigation: NavigationState | None = None
         self._head = HeadController(start=(float(self._stand[_HEAD_PAN]), float(self._stand[_HEAD_TILT])))
         self._task_velocity = Velocity()  # what a running plan step asks the legs for (turning to look)
+        self._arm: ArmMotion | None = None  # whole-body reaching; built on first use (placo loads a model)
+        self._arm_active = False  # the arm motion owns the joints (reaching, grasping, standing up)
+        self._default_stand = self._stand.copy()
         self._perception = (
             PerceptionService(layout, self._board_latest, self._bus.publish, realtime) if perception else None
         )
@@ -284,7 +291,106 @@ class RobotWorker:
         capabilities = default_capabilities()
         capabilities["detect_object"] = self._detect_object
         capabilities["navigate_to"] = self._navigate_to
+        capabilities["pick_object"] = self._pick_object
+        capabilities["place_object"] = self._place_object
         return capabilities
+
+    def _pick_object(self, args: dict[str, str], ctx: ExecutionContext) -> str:
+        """Stand where the object is in the right hand's reach, grasp it with contacts only, lift it and check it
+        rose with the hand; then stand up holding it, ready to walk."""
+        if self._perception is None:
+            raise StepFailed("picking needs the camera, and perception is off in this worker")
+        name = self._world_context().resolve_object(args["object"]) or args["object"]
+        obj = next((o for o in self.layout.objects if o.name == name), None)
+        if obj is None:
+            raise StepFailed(f"unknown object {args['object']!r}")
+        with self._lock:
+            held = self._held_object
+        if held is not None:
+            raise StepFailed(f"already holding the {held}: place it first")
+        try:
+            report = pick(name, obj.height, ArmBody(self, ctx))
+        except PickFailed as exc:
+            raise StepFailed(str(exc)) from exc
+        finally:
+            self._set_task_velocity(Velocity())
+            self._set_navigation(None)
+        with self._lock:
+            self._held_object = name
+        self._bus.publish("manipulation/picked", f"holding the {name}", name=name, grip_mm=report.grip_m * 2000,
+                          rise_m=report.rise_m, stance_corrections=report.stance_corrections)  # fmt: skip
+        return f"holding the {name}: lifted {report.rise_m * 100:.1f} cm, gripper {report.grip_m * 2000:.0f} mm open"
+
+    def _place_object(self, args: dict[str, str], ctx: ExecutionContext) -> str:
+        """Put the held object down on a named surface, at a free spot in front of the robot, and check it stands
+        there."""
+        if self._perception is None:
+            raise StepFailed("placing needs the camera, and perception is off in this worker")
+        with self._lock:
+            held = self._held_object
+        if held is None:
+            raise StepFailed("not holding anything to place")
+        name = self._world_context().resolve_place(args["location"])
+        place = next((p for p in self.layout.places if p.name == name), None)
+        if place is None:
+            raise StepFailed(f"unknown place {args['location']!r}")
+        obj = next(o for o in self.layout.objects if o.name == held)
+        spot = self._place_spot(place, held)
+        if spot is None:
+            raise StepFailed(f"unreachable: no free spot on the {place.name} in front of the robot")
+        try:
+            report = place_held(held, obj.height, spot, place.approach[2], ArmBody(self, ctx))
+        except (PlaceFailed, PickFailed) as exc:
+            raise StepFailed(str(exc)) from exc
+        finally:
+            self._set_task_velocity(Velocity())
+            self._set_navigation(None)
+        with self._lock:
+            self._held_object = None
+        x, y, _ = report.position
+        self._bus.publish("manipulation/placed", f"put the {held} on the {place.name}", name=held, place=place.name,
+                          position=list(report.position), error_m=report.error_m,
+                          stance_corrections=report.stance_corrections)  # fmt: skip
+        return f"put the {held} on the {place.name} at ({x:.2f}, {y:.2f}), {report.error_m * 100:.1f} cm from the spot"
+
+    def _place_spot(self, place: Place, held: str) -> np.ndarray | None:
+        """Where on the place's surface to put the held object: free of what the robot remembers standing there."""
+        if place.surface is None:
+            return None
+        assert self._perception is not None
+        occupied = [k.position[:2] for k in self._perception.memory.snapshot() if k.name != held]
+        return choose_spot(place.surface, place.approach, occupied)
+
+    def _arm_motion(self) -> ArmMotion:
+        if self._arm is None:
+            directory = Path(self._model_dir or tempfile.mkdtemp(prefix="humanoid-placo-"))
+            self._model_dir = str(directory)
+            self._arm = ArmMotion(ReachIK(write_placo_model(directory), self.dt), self.dt)
+        return self._arm
+
+    def _take_arm(self) -> ArmMotion:
+        """Give the joints to the arm motion, starting from what is commanded now (the robot standing still)."""
+        arm = self._arm_motion()
+        with self._lock:
+            if not self._arm_active:
+                arm.start(self._targets.copy(), "right")
+                self._arm_active = True
+        return arm
+
+    def _release_arm(self, upper_body: np.ndarray | None) -> None:
+        """Hand the joints back to the posture controller and walking: with the upper body held as in
+        `upper_body` (carrying), or in the default standing posture."""
+        arm = self._arm_motion()
+        stand = self._default_stand.copy()
+        upper = [humanoid_v1.JOINT_NAMES.index(n) for n in UPPER_BODY_JOINTS]
+        if upper_body is not None:
+            stand[upper] = upper_body[upper]
+        self._loco.walking.ik.set_upper_body(dict(zip(humanoid_v1.JOINT_NAMES, stand, strict=True)))
+        with self._lock:
+            self._stand = stand
+            self._posture.hold(arm.targets)
+            self._posture.move_to(stand)
+            self._arm_active = False
 
     def _navigate_to(self, args: dict[str, str], ctx: ExecutionContext) -> str:
         """Walk to a named place: a planned path to the open floor in front of it, then a short precise approach."""
@@ -292,25 +398,59 @@ class RobotWorker:
             raise StepFailed("navigation needs the lidar's map, and perception is off in this worker")
         name = self._world_context().resolve_place(args["target"])
         place = next((p for p in self.layout.places if p.name == name), None)
-        if place is None:
+        pose = parse_pose_goal(args["target"]) if place is None else None
+        if place is None and pose is None:
             raise StepFailed(f"unknown place {args['target']!r}")
         self._head.point(0.0, DEFAULT_TILT)  # look ahead and down while walking
         try:
-            navigator = Navigator(_NavBody(self, ctx), lambda: self._sim_time, self._set_navigation)
-            report = navigator.go(place.staging, place.approach)
+            navigator = Navigator(NavBodyOfWorker(self, ctx), lambda: self._sim_time, self._set_navigation)
+            if pose is not None:  # a pose on the map: walk there, then turn to its heading if it has one
+                costmap = NavBodyOfWorker(self, ctx).costmap(ROBOT_RADIUS)
+                if costmap is not None and costmap.blocked_at(pose.x, pose.y):
+                    raise StepFailed(f"unreachable: ({pose.text()}) is in or against an obstacle on the map")
+                final = None if pose.yaw is None else (pose.x, pose.y, pose.yaw)
+                report = navigator.go((pose.x, pose.y), final)
+            else:
+                assert place is not None
+                report = navigator.go(place.staging, lambda: self._work_pose(place, ctx.upcoming))
         except NavigationFailed as exc:
             raise StepFailed(str(exc)) from exc
         finally:
             self._set_task_velocity(Velocity())
             self._set_navigation(None)
         replans = f", {report.replans} replan{'s' if report.replans != 1 else ''}" if report.replans else ""
-        self._bus.publish("navigation/arrived", f"at the {place.name}", place=place.name, walked_m=report.walked_m,
-                          replans=report.replans, error_m=report.final_error_m, sim_s=report.sim_s,
+        where = f"the {place.name}" if place is not None else f"({pose.text()})" if pose is not None else ""
+        self._bus.publish("navigation/arrived", f"at {where}", place=place.name if place else None,
+                          goal=pose.text() if pose else None, walked_m=report.walked_m, replans=report.replans,
+                          error_m=report.final_error_m, sim_s=report.sim_s,
                           path=[list(p) for p in report.path])  # fmt: skip
         return (
-            f"at the {place.name}: walked {report.walked_m:.2f} m in {report.sim_s:.0f} s{replans}, "
+            f"at {where}: walked {report.walked_m:.2f} m in {report.sim_s:.0f} s{replans}, "
             f"{report.final_error_m * 100:.1f} cm and {report.final_heading_error_deg:.0f} deg from the goal"
         )
+
+    def _work_pose(self, place: Place, upcoming: tuple[Step, ...]) -> tuple[float, float, float]:
+        """Where to stop at a place: if the plan next picks an object seen there, or puts one down there, the
+        stance with that object or spot in reach (saves a correction walk at the surface); otherwise the place's
+        own approach pose."""
+        assert self._perception is not None
+        for step in upcoming:
+            if step.action == "navigate_to":
+                break
+            if step.action == "place_object":
+                spot = self._place_spot(place, self._held_object or "")
+                if spot is not None and self._world_context().resolve_place(step.args["location"]) == place.name:
+                    stance = grasp_stance((float(spot[0]), float(spot[1])), place.approach[2])
+                    return (stance.x, stance.y, stance.yaw)
+                continue
+            if step.action != "pick_object" or place.surface is None:
+                continue
+            name = self._world_context().resolve_object(step.args["object"]) or step.args["object"]
+            remembered = self._perception.memory.get(name)
+            if remembered is not None and place.surface.contains(*remembered.position[:2]):
+                stance = grasp_stance(remembered.position[:2], place.approach[2])
+                return (stance.x, stance.y, stance.yaw)
+        return place.approach
 
     def _detect_object(self, args: dict[str, str], ctx: ExecutionContext) -> str:
         """Look for the object (head, then body); found: its 3D position goes into the world memory."""
@@ -320,7 +460,7 @@ class RobotWorker:
         remembered = self._perception.memory.get(name)
         believed = remembered.position if remembered else self._expected_position(name)
         try:
-            result = find_object(name, _TaskBody(self, ctx), believed, ctx.check_cancelled)
+            result = find_object(name, TaskBody(self, ctx), believed, ctx.check_cancelled)
         except ObjectNotFound as exc:
             raise StepFailed(str(exc)) from exc
         except SensorError as exc:
@@ -404,6 +544,11 @@ class RobotWorker:
         command, received = pending
         self._teleop_velocity, self._teleop_deadline = Velocity(), None
         self._head.freeze()
+        with self._lock:
+            if self._arm_active and self._arm is not None:  # the arm stops where it is commanded now
+                self._arm.stop()
+                self._posture.hold(self._arm.targets)
+                self._arm_active = False
         walking = self._loco.moving
         if walking:
             # a biped mid-stride cannot freeze its joints: it finishes the step and puts its feet together
@@ -663,6 +808,9 @@ class RobotWorker:
             self._teleop_active = False
             self._held_object = None
             self._posture_name = Posture.STAND
+            self._arm_active = False
+            self._stand = self._default_stand.copy()
+        self._loco.walking.ik.set_upper_body(dict(zip(humanoid_v1.JOINT_NAMES, self._default_stand, strict=True)))
         self._loco.halt()
         self._head.reset(start=(float(self._stand[_HEAD_PAN]), float(self._stand[_HEAD_TILT])))
         if self._perception is not None:  # objects are back where the world puts them; odometry starts over
@@ -807,9 +955,14 @@ class RobotWorker:
             if self._estop_latched:
                 velocity = Velocity()
             in_stance = self._posture_name == Posture.STAND and self._posture.settled
+            arm = self._arm if self._arm_active else None
         if deadman:
             self._bus.publish("teleop/deadman", f"no teleop input for {TELEOP_TIMEOUT_S * 1e3:.0f} ms: stopping",
                               Level.WARN)  # fmt: skip
+        if arm is not None and not fallen:  # reaching: feet planted, the estimate follows
+            s = sensors(measured)
+            self._loco.odometry.update(s.joint_positions, s.imu_quat, s.foot_forces)
+            return arm.update(measured.joint_positions)
         if fallen or not in_stance:
             if not fallen:  # crouching or moving between postures: the feet stay put, the estimate follows
                 s = sensors(measured)
@@ -832,6 +985,9 @@ class RobotWorker:
 
     def _on_fall(self, measured: Measurements) -> None:
         self._loco.halt()
+        if self._arm_active and self._arm is not None:
+            self._arm.stop()
+            self._arm_active = False
         self._posture.hold(self._targets)  # hold the last references: no sudden move on the ground
         with self._lock:
             self._fallen = True
@@ -924,112 +1080,8 @@ _HEAD_PAN = humanoid_v1.JOINT_NAMES.index("head_pan")
 _HEAD_TILT = humanoid_v1.JOINT_NAMES.index("head_tilt")
 
 
-class _TaskBody:
-    """The robot's head and legs as a plan step uses them (the object search's `SearchBody`): each call blocks in
-    simulated time and gives up when the plan is cancelled."""
-
-    def __init__(self, worker: RobotWorker, ctx: ExecutionContext) -> None:
-        self._worker = worker
-        self._ctx = ctx
-
-    def point_head(self, pan: float, tilt: float) -> None:
-        worker = self._worker
-        worker._head.point(pan, tilt)
-        while not worker._head.at_target:
-            self._ctx.wait_sim(0.02)
-        self._ctx.wait_sim(HEAD_SETTLE_S)
-
-    def look_at(self, target: tuple[float, float, float]) -> bool:
-        position, rotation = self._worker._map_trunk()
-        pan, tilt, reachable = self._worker._head.angles_to_look_at(position, rotation, np.asarray(target))
-        if reachable:
-            self.point_head(pan, tilt)
-        return reachable
-
-    def face(self, target: tuple[float, float, float]) -> None:
-        position, rotation = self._worker._map_trunk()
-        heading = math.atan2(target[1] - position[1], target[0] - position[0])
-        self.turn_in_place(_wrap(heading - yaw_of(rotation)))
-
-    def turn_in_place(self, angle: float) -> None:
-        worker = self._worker
-        worker._head.point(0.0, worker._head.target[1])
-        turned, last = 0.0, yaw_of(worker._map_trunk()[1])
-        try:
-            for rate in (TURN_RATE_RAD_S, TURN_RATE_RAD_S / 2):  # a second, slower turn takes up the overshoot
-                remaining = angle - turned
-                if abs(remaining) < TURN_TOLERANCE_RAD:
-                    break
-                direction = math.copysign(1.0, remaining)
-                worker._set_task_velocity(Velocity(0.0, 0.0, direction * rate))
-                # a turn that takes three times as long as it should is blocked (an arm against furniture)
-                deadline = worker._sim_time + 3.0 * abs(remaining) / rate + 3.0
-                # stop early by about what the two stopping steps still turn
-                while direction * (angle - turned) > rate * 0.3:
-                    if worker._sim_time > deadline:
-                        raise StepFailed(f"could not turn in place: turned {math.degrees(turned):.0f} of "
-                                         f"{math.degrees(angle):.0f} deg (blocked?)")  # fmt: skip
-                    self._ctx.wait_sim(0.02)
-                    yaw = yaw_of(worker._map_trunk()[1])
-                    turned += _wrap(yaw - last)
-                    last = yaw
-                worker._set_task_velocity(Velocity())
-                while worker._loco.moving:
-                    self._ctx.wait_sim(0.02)
-                yaw = yaw_of(worker._map_trunk()[1])
-                turned += _wrap(yaw - last)
-                last = yaw
-        finally:
-            worker._set_task_velocity(Velocity())
-
-    def fresh_detections(self) -> tuple[DetectedObject, ...]:
-        perception = self._worker._perception
-        assert perception is not None
-        return perception.detections_after(self._worker._sim_time)
-
-
-class _NavBody:
-    """The legs and the map as navigation uses them (the navigator's `NavBody`), in simulated time."""
-
-    def __init__(self, worker: RobotWorker, ctx: ExecutionContext) -> None:
-        self._worker = worker
-        self._ctx = ctx
-        self._cached: tuple[int, float, Costmap] | None = None
-
-    def pose(self) -> tuple[float, float, float]:
-        position, rotation = self._worker._map_trunk()
-        return float(position[0]), float(position[1]), yaw_of(rotation)
-
-    def costmap(self, inflate_m: float) -> Costmap | None:
-        perception = self._worker._perception
-        grid = perception.feed().map if perception is not None else None
-        if grid is None:
-            return None
-        if self._cached is None or self._cached[0] != grid.scans or self._cached[1] != inflate_m:
-            self._cached = (grid.scans, inflate_m, Costmap.from_map(grid, inflate_m))
-        return self._cached[2]
-
-    def drive(self, vx: float, vy: float, yaw_rate: float) -> None:
-        velocity = clip_velocity(Velocity(vx, vy, yaw_rate), self._worker._loco.velocity.limits)
-        self._worker._set_task_velocity(velocity)
-
-    def wait(self, seconds: float) -> None:
-        self._ctx.wait_sim(seconds)
-
-    def walking(self) -> bool:
-        return self._worker._loco.moving
-
-    def fallen(self) -> bool:
-        with self._worker._lock:
-            return self._worker._fallen
-
-
 def _floats(values: np.ndarray) -> tuple[float, ...]:
     return tuple(float(v) for v in values)
-
-
-def _wrap(angle: float) -> float:
-    return math.atan2(math.sin(angle), math.cos(angle))
 
 
 def _crouch_targets() -> np.ndarray:

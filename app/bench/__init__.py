@@ -21,8 +21,18 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
     elif suite == "perception":
         from app.bench.perception import run_perception
 
-        result = run_perception(seeds=args.seeds, views=args.views, seed=args.seed or 0,
+        result = run_perception(seeds=args.seeds or 50, views=args.views, seed=args.seed or 0,
                                 realtime_s=args.realtime_duration, tours=args.tours)  # fmt: skip
+    elif suite == "capstone":
+        from app.bench.capstone import TASKS, run_capstone
+
+        tasks = tuple(t.strip() for t in args.tasks.split(",") if t.strip())
+        unknown = [t for t in tasks if t not in TASKS]
+        if unknown or not tasks:
+            choices = ", ".join(TASKS)
+            print(f"unknown capstone task(s) {unknown or args.tasks!r}: choose from {choices}", file=sys.stderr)
+            return 2
+        result = run_capstone(seeds=args.seeds or 30, seed=args.seed or 0, tasks=tasks, jobs=args.jobs)
     else:  # pragma: no cover - argparse restricts the choices
         raise SystemExit(f"unknown suite {suite}")
     text = json.dumps(result, indent=2)

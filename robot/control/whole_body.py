@@ -37,11 +37,16 @@ class WholeBodyIK:
         self.reset_standing()
 
     def set_upper_body(self, posture: dict[str, float]) -> None:
-        self.upper_body.set_joints({n: posture[n] for n in UPPER_BODY_JOINTS})
+        """Arms, wrists, grippers and head to hold while walking (arms down, or carrying something)."""
+        self._upper = {n: float(posture[n]) for n in UPPER_BODY_JOINTS}
+        self.upper_body.set_joints(self._upper)
 
     def reset_standing(self) -> np.ndarray:
         """Standing pose at the origin of the planner's frame (where every walk starts); returns its targets."""
         put_at_walk_start(self.robot)
+        for name, value in self._upper.items():  # a walk starts with the arms where they are held
+            self.robot.set_joint(name, value)
+        self.robot.update_kinematics()
         self.tasks.reach_initial_pose(np.eye(4), FEET_SPACING_M, COM_HEIGHT_M, 0.0)
         return self.joint_targets()
 

@@ -45,9 +45,12 @@ FOOT_LENGTH = 0.127
 FOOT_WIDTH = 0.07
 
 # Gripper (shared FINDINGS.md: grasped a 50 g mug with contacts only). Sizes are half extents (m).
-PALM_HALF = (0.016, 0.034, 0.008)  # x: closing axis, y: along the forearm, z: thickness
+# The fingers close along the wrist link's z: in the plane the arm moves in (the OP3's shoulder roll, elbow and the
+# wrist share one axis, x), across the forearm. Closing along x, the arm's pitch would set the closing direction:
+# vertical whenever the hand is in front of the body.
+PALM_HALF = (0.008, 0.034, 0.016)  # x: thickness, y: along the forearm, z: closing axis
 PALM_MASS = 0.082
-FINGER_HALF = (0.003, 0.022, 0.011)
+FINGER_HALF = (0.011, 0.022, 0.003)
 FINGER_MASS = 0.012
 FINGER_TRAVEL = 0.028  # each finger, from closed (0) to open; the gripper opens 56 mm
 GRIP_KP_N_PER_M = 1000.0
@@ -119,10 +122,11 @@ STAND_KNEE_BEND = op3.STAND_KNEE_BEND
 CROUCH_KNEE_BEND = 1.4
 
 
-def stand_posture(knee_bend: float = STAND_KNEE_BEND, gripper_open: float = FINGER_TRAVEL) -> dict[str, float]:
-    """Joint targets of a standing posture: knees bent, hips and ankles share the bend, arms down, grippers open."""
+def stand_posture(knee_bend: float = STAND_KNEE_BEND) -> dict[str, float]:
+    """Joint targets of a standing posture: knees bent, hips and ankles share the bend, arms down, grippers closed
+    (an open gripper's lower finger hangs 2 cm above the floor, and a walking robot's sway dragged it along)."""
     posture = op3.stand_posture(knee_bend)
-    posture.update({"l_wrist": 0.0, "r_wrist": 0.0, "l_grip": gripper_open, "r_grip": gripper_open})
+    posture.update({"l_wrist": 0.0, "r_wrist": 0.0, "l_grip": 0.0, "r_grip": 0.0})
     return posture
 
 
@@ -153,10 +157,10 @@ def _add_gripper(spec: mujoco.MjSpec, side: str) -> None:
     for finger, sign in (("a", 1.0), ("b", -1.0)):
         body = wrist.add_body(name=f"{s}_finger_{finger}", pos=[0, finger_y, 0])
         body.add_joint(name=f"{s}_grip" if finger == "a" else f"{s}_grip_mimic", type=mujoco.mjtJoint.mjJNT_SLIDE,
-                       axis=[sign, 0, 0], range=[0, FINGER_TRAVEL], limited=mujoco.mjtLimited.mjLIMITED_TRUE,
+                       axis=[0, 0, sign], range=[0, FINGER_TRAVEL], limited=mujoco.mjtLimited.mjLIMITED_TRUE,
                        damping=2.0, armature=0.01)  # fmt: skip
         body.add_geom(name=f"{s}_finger_{finger}_pad", type=mujoco.mjtGeom.mjGEOM_BOX, size=list(FINGER_HALF),
-                      pos=[sign * FINGER_HALF[0], 0, 0], mass=FINGER_MASS, friction=list(FINGER_FRICTION),
+                      pos=[0, 0, sign * FINGER_HALF[2]], mass=FINGER_MASS, friction=list(FINGER_FRICTION),
                       condim=4, rgba=[0.85, 0.45, 0.1, 1], group=GRIPPER_GEOM_GROUP)  # fmt: skip
     wrist.add_site(name=HAND_FRAMES[side], pos=[0, finger_y + out * 0.006, 0])
     spec.add_equality(type=mujoco.mjtEq.mjEQ_JOINT, name1=f"{s}_grip_mimic", name2=f"{s}_grip")

@@ -41,7 +41,8 @@ def _add_box(parent: mujoco.MjsBody, box: Box) -> None:
 
 def _add_object(spec: mujoco.MjSpec, obj: WorldObject) -> None:
     x, y, z = obj.position
-    body = spec.worldbody.add_body(name=object_body_name(obj.name), pos=[x, y, z + 0.001])
+    body = spec.worldbody.add_body(name=object_body_name(obj.name), pos=[x, y, z + 0.001],
+                                   quat=[math.cos(obj.yaw / 2), 0.0, 0.0, math.sin(obj.yaw / 2)])  # fmt: skip
     body.add_freejoint(name=object_body_name(obj.name) + "_free")
     rgba = list(obj.rgba)
     friction = [1.0, 0.01, 0.0001]
@@ -55,9 +56,9 @@ def _add_object(spec: mujoco.MjSpec, obj: WorldObject) -> None:
             friction=friction,
             condim=4,
         )
-        body.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.006, 0.003, obj.height * 0.3],
-                      pos=[0, -(obj.radius + 0.006), obj.height / 2], mass=obj.mass * 0.15, rgba=rgba,
-                      friction=friction, condim=4)  # fmt: skip
+        body.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.003, 0.006, obj.height * 0.3],
+                      pos=[obj.radius + 0.006, 0, obj.height / 2], mass=obj.mass * 0.15, rgba=rgba,
+                      friction=friction, condim=4)  # the handle, along +x  # fmt: skip
     elif obj.shape == "bottle":
         body.add_geom(
             type=mujoco.mjtGeom.mjGEOM_CYLINDER,

@@ -45,6 +45,19 @@ class Box:
     def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
         return abs(x - self.x) <= self.half_x + margin and abs(y - self.y) <= self.half_y + margin
 
+    def distance_along(self, x: float, y: float, yaw: float) -> float:
+        """How far from (x, y), looking along `yaw`, the box begins in plan view (0 inside it, inf if missed)."""
+        enter, leave = 0.0, math.inf
+        axes = ((x, math.cos(yaw), self.x, self.half_x), (y, math.sin(yaw), self.y, self.half_y))
+        for start, d, centre, half in axes:
+            if abs(d) < 1e-9:
+                if abs(start - centre) > half:
+                    return math.inf
+                continue
+            t1, t2 = sorted(((centre - half - start) / d, (centre + half - start) / d))
+            enter, leave = max(enter, t1), min(leave, t2)
+        return enter if enter <= leave else math.inf
+
 
 @dataclass(frozen=True)
 class Place:
@@ -79,6 +92,7 @@ class WorldObject:
     height: float
     place: str
     position: tuple[float, float, float]  # centre of the body's base, world frame
+    yaw: float = 0.0  # about the vertical; a mug's handle points along the body's +x
 
 
 @dataclass(frozen=True)
@@ -144,8 +158,12 @@ def _places(counter_item_y: float) -> tuple[Place, ...]:
     )  # fmt: skip
 
 
-def _place_counter_objects(rng: np.random.Generator) -> list[WorldObject]:
-    """Objects along the counter, 6-12 cm from its front edge, at least 12 cm apart."""
+def _place_counter_objects(rng: np.random.Generator, handles: np.random.Generator) -> list[WorldObject]:
+    """Objects along the counter, 6-12 cm from its front edge, at least 12 cm apart.
+
+    Handles point to the back of the counter, give or take 30 deg: a handle beside the mug, where a finger goes,
+    foils a side grasp (shared FINDINGS.md: 1 in 10). They are drawn from their own stream (`handles`), so the rest
+    of a seed's world does not depend on them."""
     front = KITCHEN_COUNTER.x - KITCHEN_COUNTER.half_x
     y_lo = KITCHEN_COUNTER.y - KITCHEN_COUNTER.half_y + 0.1
     y_hi = KITCHEN_COUNTER.y + KITCHEN_COUNTER.half_y - 0.1
@@ -156,9 +174,10 @@ def _place_counter_objects(rng: np.random.Generator) -> list[WorldObject]:
     objects = []
     for (name, aliases, colour, shape, rgba, mass, radius, height), y in zip(_OBJECT_SPECS, ys, strict=True):
         x = front + rng.uniform(0.06, 0.12)
+        yaw = float(handles.uniform(-math.pi / 6, math.pi / 6))
         objects.append(
             WorldObject(name, aliases, colour, shape, rgba, mass, radius, height, "kitchen counter",
-                        (float(x), float(y), KITCHEN_COUNTER.height))
+                        (float(x), float(y), KITCHEN_COUNTER.height), yaw)
         )  # fmt: skip
     return objects
 
@@ -234,8 +253,9 @@ def generate_world(seed: int = 0, obstacle_count: int = 3) -> WorldLayout:
     if seed < 0:
         raise ValueError(f"seed must be >= 0, got {seed}")
     rng = np.random.default_rng(seed)
+    handles = np.random.default_rng([seed, 1])
     for _ in range(200):
-        objects = _place_counter_objects(rng)
+        objects = _place_counter_objects(rng, handles)
         mug_y = next(o.position[1] for o in objects if o.name == "red mug")
         places = _places(mug_y)
         start = (float(rng.uniform(-1.0, -0.2)), float(rng.uniform(-0.9, -0.3)), float(rng.uniform(-math.pi, math.pi)))

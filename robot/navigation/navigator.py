@@ -30,6 +30,11 @@ APPROACH_GAIN = (0.8, 0.8, 1.2)
 APPROACH_LIMIT = (0.08, 0.05, 0.4)
 ARRIVED_M = 0.02
 ARRIVED_RAD = math.radians(3.0)
+# Where the robot may come to rest: the two steps in place that stop the walk move it up to a few cm.
+SETTLED_M = 0.035
+SETTLED_RAD = math.radians(5.0)
+SETTLE_GROWTH_M = 0.015
+MAX_SETTLE_M = 0.08
 APPROACH_TIMEOUT_S = 30.0
 
 
@@ -95,17 +100,39 @@ class Navigator:
         self._on_update = on_update or (lambda state: None)
         self._goal: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
-    def go(self, staging: tuple[float, float], approach: tuple[float, float, float] | None = None) -> NavigationReport:
+    def go(self, staging: tuple[float, float],
+           approach: tuple[float, float, float] | Callable[[], tuple[float, float, float]] | None = None,
+           ) -> NavigationReport:  # fmt: skip
+        """Walk a planned path to `staging`, then straight onto the `approach` pose if one is given (a callable is
+        asked at the staging point: what the robot sees from there may decide where it stands)."""
         report = NavigationReport()
         started = self._now()
-        self._goal = approach if approach is not None else (*staging, self.body.pose()[2])
+        self._goal = approach if isinstance(approach, tuple) else (*staging, self.body.pose()[2])
         self._follow_path(staging, report)
+        if callable(approach):
+            approach = approach()
+            self._goal = approach
         if approach is not None:
             self._on_update(NavigationState(self._goal, report.path, report.replans, "approaching"))
             self._approach(approach, report)
         self._on_update(NavigationState(self._goal, report.path, report.replans, "arrived"))
         x, y, yaw = self.body.pose()
         goal = approach if approach is not None else (*staging, yaw)
+        report.final_error_m = math.dist((x, y), goal[:2])
+        report.final_heading_error_deg = math.degrees(abs(math.remainder(yaw - goal[2], math.tau)))
+        report.sim_s = self._now() - started
+        return report
+
+    def step_to(self, goal: tuple[float, float, float], settle_m: float = SETTLED_M) -> NavigationReport:
+        """A short straight walk onto a pose, without planning (adjusting the stance at a counter: from right in
+        front of furniture the map puts the robot inside the furniture's grown footprint, where A* cannot start)."""
+        report = NavigationReport()
+        started = self._now()
+        self._goal = goal
+        self._on_update(NavigationState(goal, (), 0, "approaching"))
+        self._approach(goal, report, settle_m)
+        self._on_update(NavigationState(goal, (), 0, "arrived"))
+        x, y, yaw = self.body.pose()
         report.final_error_m = math.dist((x, y), goal[:2])
         report.final_heading_error_deg = math.degrees(abs(math.remainder(yaw - goal[2], math.tau)))
         report.sim_s = self._now() - started
@@ -167,31 +194,32 @@ class Navigator:
                     raise
                 self.body.wait(0.5)
 
-    def _approach(self, goal: tuple[float, float, float], report: NavigationReport) -> None:
-        """Walk the last stretch slowly and stop on the goal pose (position first, then heading)."""
+    def _approach(self, goal: tuple[float, float, float], report: NavigationReport,
+                  settle_m: float = SETTLED_M) -> None:  # fmt: skip
+        """Walk the last stretch slowly and stop on the goal pose. Stopping takes two steps in place, which move the
+        robot a few cm (more when it carries something): once stopped within `settle_m` and SETTLED_RAD it has
+        arrived; further off, it walks again, and each retry accepts SETTLE_GROWTH_M more (stopping drifts about
+        the same each time, so insisting would never end)."""
         body = self.body
         kx, ky, kw = APPROACH_GAIN
         lx, ly, lw = APPROACH_LIMIT
         deadline = self._now() + APPROACH_TIMEOUT_S
         report.walked_m += math.dist(body.pose()[:2], goal[:2])
+        tolerance = settle_m
         while self._now() < deadline:
             self._check_fall()
-            x, y, yaw = body.pose()
-            dx, dy = goal[0] - x, goal[1] - y
-            c, s = math.cos(yaw), math.sin(yaw)
-            ex, ey = c * dx + s * dy, -s * dx + c * dy
-            heading_error = math.remainder(goal[2] - yaw, math.tau)
+            ex, ey, heading_error = _pose_error(body.pose(), goal)
             if math.hypot(ex, ey) < ARRIVED_M and abs(heading_error) < ARRIVED_RAD:
-                if not body.walking():
+                self._stop()
+                ex, ey, heading_error = _pose_error(body.pose(), goal)
+                if math.hypot(ex, ey) < tolerance and abs(heading_error) < SETTLED_RAD:
                     return
-                body.drive(0.0, 0.0, 0.0)
-            else:
-                body.drive(_clip(kx * ex, lx), _clip(ky * ey, ly), _clip(kw * heading_error, lw))
+                tolerance = min(tolerance + SETTLE_GROWTH_M, MAX_SETTLE_M)
+            body.drive(_clip(kx * ex, lx), _clip(ky * ey, ly), _clip(kw * heading_error, lw))
             body.wait(CONTROL_PERIOD_S)
         self._stop()
-        x, y, yaw = body.pose()
-        error = math.dist((x, y), goal[:2])
-        if error > 3 * ARRIVED_M:
+        error = math.dist(body.pose()[:2], goal[:2])
+        if error > MAX_SETTLE_M:
             raise NavigationFailed(f"stuck: could not settle on the goal pose ({error * 100:.0f} cm off)")
 
     def _stop(self) -> None:
@@ -205,6 +233,14 @@ class Navigator:
     def _check_fall(self) -> None:
         if self.body.fallen():
             raise NavigationFailed("fell while walking")
+
+
+def _pose_error(pose: tuple[float, float, float], goal: tuple[float, float, float]) -> tuple[float, float, float]:
+    """The goal relative to the robot: ahead, to the left (m), and the heading error (rad)."""
+    x, y, yaw = pose
+    dx, dy = goal[0] - x, goal[1] - y
+    c, s = math.cos(yaw), math.sin(yaw)
+    return c * dx + s * dy, -s * dx + c * dy, math.remainder(goal[2] - yaw, math.tau)
 
 
 def _clip(value: float, limit: float) -> float:

@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
-from robot.interface import Plan, PlanState, StepState
+from robot.interface import Plan, PlanState, Step, StepState
 
 
 class StepFailed(Exception):
@@ -33,6 +33,9 @@ class ExecutionContext:
     say: Callable[[str], None]
     wait_sim: Callable[[float], None]  # block until this much simulated time has passed (or cancel)
     held_object: Callable[[], str | None] = field(default=lambda: None)
+    # The plan's steps after the running one: a step may prepare for them (navigation stops where the next pick
+    # can reach its object).
+    upcoming: tuple[Step, ...] = ()
 
     def check_cancelled(self) -> None:
         if self.cancel.is_set():
@@ -86,7 +89,7 @@ class PlanExecutor:
             try:
                 if capability is None:
                     raise CapabilityUnavailable(f"no capability for action {step.action!r}")
-                detail = capability(step.args, ctx)
+                detail = capability(step.args, replace(ctx, upcoming=tuple(plan.steps[index + 1 :])))
             except Cancelled:
                 on_step(index, StepState.CANCELLED, "cancelled while running")
                 self._skip_rest(plan, index + 1, on_step, StepState.CANCELLED, "plan cancelled")

@@ -9,6 +9,7 @@ from __future__ import annotations
 import re
 
 from robot.interface import Plan, Step
+from robot.navigation.goal import parse_pose_goal
 from robot.planning.planner import PlanningError
 from robot.planning.world_context import WorldContext, normalize
 
@@ -29,6 +30,13 @@ class RulesPlanner:
         said = re.match(r"^\s*(?:please\s+)?(?:say|speak|tell me|announce)\s*[:,]?\s+(.+)$", raw, re.IGNORECASE)
         if said:
             return Plan((Step("say", {"text": said.group(1).strip().strip("\"'")}),))
+
+        # "go to 1.2, 0.5", "walk to (1.2, 0.5, 90 deg)": a pose on the map (punctuation matters here)
+        m = re.match(rf"^\s*(?:please\s+)?{_GO}\s+(?:to\s+)?(.+)$", raw, re.IGNORECASE)
+        pose = parse_pose_goal(m.group(1)) if m else None
+        if pose is not None:
+            return Plan((Step("navigate_to", {"target": pose.text()}),
+                         Step("say", {"text": f"I am at {pose.text()}."})))  # fmt: skip
 
         t = normalize(raw)
         t = re.sub(r"^(?:please |robot |hey robot |can you |could you |would you )+", "", t)

@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from robot.interface import Plan
+from robot.navigation.goal import parse_pose_goal
 from robot.planning.schema import schema_errors
 from robot.planning.world_context import WorldContext
 
@@ -27,8 +28,12 @@ def validate_plan(plan: Plan, world: WorldContext) -> tuple[Plan | None, list[st
         if step.action == "navigate_to":
             target = args["target"]
             resolved = world.resolve_place(target) or world.resolve_object(target)
-            if resolved is None:
-                errors.append(f"step {i}: unknown place {target!r} (known: {', '.join(world.places)})")
+            pose = parse_pose_goal(target) if resolved is None else None
+            if pose is not None:
+                args["target"] = pose.text()
+            elif resolved is None:
+                errors.append(f"step {i}: unknown place {target!r} (known: {', '.join(world.places)}; or a pose "
+                              f"'x, y' or 'x, y, heading deg' in metres)")  # fmt: skip
             else:
                 args["target"] = resolved
         elif step.action in ("detect_object", "pick_object"):

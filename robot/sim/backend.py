@@ -24,7 +24,7 @@ from robot.model.world import WorldLayout
 
 # A biped is considered fallen beyond this trunk tilt or below this trunk height.
 FALL_TILT_DEG = 45.0
-FALL_HEIGHT_M = 0.15
+FALL_HEIGHT_M = 0.12  # a deep crouch (reaching to a 0.2 m table) brings the trunk to 0.15 m
 # Gap left under the soles when the robot is placed, so it settles onto the floor instead of starting in it (m).
 SOLE_CLEARANCE_M = 0.001
 

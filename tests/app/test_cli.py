@@ -30,12 +30,14 @@ def test_run_prints_the_result_and_records_a_session(tmp_path) -> None:
 
     second = json.loads(humanoid(tmp_path, "run", "pick up the red mug from the kitchen counter", "--json").stdout)
     assert second["session_id"] == 2
-    assert second["success"] is False and second["held_object"] is None and not second["fell"]
-    # it walks to the counter and finds the mug; grasping is not built yet, and says so
-    assert [s["status"] for s in second["steps"]] == ["succeeded", "succeeded", "failed", "skipped"]
+    # the capstone: it walks to the counter, finds the mug, grasps and lifts it, and says so
+    assert [s["status"] for s in second["steps"]] == ["succeeded"] * 4, second["steps"]
+    assert second["success"] is True and second["held_object"] == "red mug" and not second["fell"]
     assert "at the kitchen counter" in second["steps"][0]["detail"]
     assert "found red mug at" in second["steps"][1]["detail"]
-    assert "not available" in second["steps"][2]["detail"]
+    assert "holding the red mug" in second["steps"][2]["detail"]
+    assert second["steps"][3]["action"] == "say"
+    assert second["wall_time_s"] < second["sim_time_s"]  # headless runs faster than real time
 
 
 def test_run_with_an_unknown_object_fails_clearly(tmp_path) -> None:
@@ -63,3 +65,9 @@ def test_bench_walk_writes_its_figures_as_json(tmp_path) -> None:
     assert all(len(t["script"]) >= 1 for t in result["trials"])
     realtime = result["realtime"]
     assert realtime["tick_p99_ms"] > 0 and realtime["rtf"] > 0.5 and realtime["walked_m"] > 0.01  # it walked
+
+
+def test_bench_capstone_names_the_tasks_it_knows_when_given_another(tmp_path) -> None:
+    done = humanoid(tmp_path, "bench", "capstone", "--tasks", "pick,juggle", "--seeds", "1")
+    assert done.returncode == 2
+    assert "juggle" in done.stderr and "pick, bring, blocked" in done.stderr

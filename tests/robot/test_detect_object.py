@@ -155,3 +155,22 @@ def _point_ahead(path, here, distance: float) -> tuple[float, float]:
             return (a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]))
         target -= length
     return tuple(path[-1])
+
+
+def test_navigate_to_a_pose_walks_there_on_its_own_map_and_turns_to_the_heading() -> None:
+    """A goal typed or clicked as a pose instead of a place (here the dock's coordinates, facing +y)."""
+    layout = generate_world(0)
+    dock = next(p for p in layout.places if p.name == "charging dock").approach
+    worker = _headless(layout)
+    try:
+        target = f"{dock[0]:.2f}, {dock[1]:.2f}, 90 deg"
+        assert worker.submit(ExecutePlan({"steps": [{"action": "navigate_to", "args": {"target": target}}]})).accepted
+        assert worker.wait_for(lambda s: s.plan is not None and s.plan.state != PlanState.RUNNING, 400)
+        state = worker.state()
+        assert state.plan.state == PlanState.SUCCEEDED, [s.detail for s in state.plan.steps]
+        assert state.plan.steps[0].detail.startswith(f"at ({target})")
+        assert math.dist(state.base_position[:2], dock[:2]) < 0.10  # the truth, not its own estimate
+        assert abs(math.remainder(state.base_yaw_rad - math.pi / 2, math.tau)) < math.radians(10)
+        assert not state.fallen
+    finally:
+        worker.stop()

@@ -69,3 +69,18 @@ def test_cancel_stops_before_the_next_step() -> None:
     result, updates, _ = run(plan, {"say": cancel_during}, cancel)
     assert result == PlanState.CANCELLED
     assert final_states(updates) == {0: StepState.SUCCEEDED, 1: StepState.CANCELLED}
+
+
+def test_each_step_sees_the_steps_after_it_so_it_can_prepare_for_them() -> None:
+    seen: list[tuple[str, ...]] = []
+
+    def record(args, ctx: ExecutionContext) -> str:
+        seen.append(tuple(step.action for step in ctx.upcoming))
+        return "ok"
+
+    capabilities = {**default_capabilities(), "navigate_to": record, "pick_object": record, "say": record}
+    plan = Plan((Step("navigate_to", {"target": "kitchen counter"}), Step("pick_object", {"object": "red mug"}),
+                 Step("say", {"text": "done"})))  # fmt: skip
+    result, _, _ = run(plan, capabilities)
+    assert result == PlanState.SUCCEEDED
+    assert seen == [("pick_object", "say"), ("say",), ()]

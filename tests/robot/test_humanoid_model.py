@@ -94,3 +94,26 @@ def test_placo_model_matches_the_simulated_kinematics(robot_model, placo_robot) 
 def test_placo_model_has_the_same_mass(robot_model, placo_robot) -> None:
     trunk = robot_model.body(humanoid_v1.TRUNK_BODY).id
     assert placo_robot.total_mass() == pytest.approx(robot_model.body_subtreemass[trunk], rel=1e-6)
+
+
+def test_standing_the_grippers_hang_well_clear_of_the_floor(robot_model) -> None:
+    """An open gripper's lower finger hung 2 cm above the floor, and the walking robot's sway dragged it along:
+    standing (and walking), the grippers are closed, which lifts their lowest point 1 cm."""
+    data = mujoco.MjData(robot_model)
+    for name, value in humanoid_v1.stand_posture().items():
+        data.qpos[robot_model.joint(name).qposadr[0]] = value
+    mujoco.mj_kinematics(robot_model, data)
+
+    def lowest(body_names: tuple[str, ...]) -> float:
+        low = np.inf
+        for g in range(robot_model.ngeom):
+            if robot_model.body(robot_model.geom_bodyid[g]).name in body_names and robot_model.geom_contype[g]:
+                corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+                box = corners * robot_model.geom_size[g]
+                world = data.geom_xpos[g] + box @ data.geom_xmat[g].reshape(3, 3).T
+                low = min(low, float(world[:, 2].min()))
+        return low
+
+    soles = lowest(tuple(humanoid_v1.FOOT_BODIES.values()))
+    hands = lowest(tuple(f"{s}_{part}" for s in "lr" for part in ("wrist_link", "finger_a", "finger_b")))
+    assert hands - soles > 0.044  # 0.038 with the grippers open

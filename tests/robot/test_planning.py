@@ -120,7 +120,8 @@ def test_validator_checks_the_world_and_the_order(world) -> None:
     plan, errors = validate_plan(bad, world)
     assert plan is None
     assert errors == [
-        "step 1: unknown place 'moon' (known: kitchen counter, living-room table, charging dock)",
+        "step 1: unknown place 'moon' (known: kitchen counter, living-room table, charging dock; or a pose "
+        "'x, y' or 'x, y, heading deg' in metres)",
         "step 2: place_object before any pick_object: the robot holds nothing",
         "step 4: cannot pick 'green apple' while holding 'red mug'",
     ]

@@ -1,8 +1,10 @@
 from __future__ import annotations
 
+import math
+
 import pytest
 
-from robot.model.world import KITCHEN_COUNTER, generate_world, occupancy_grid, reachable
+from robot.model.world import KITCHEN_COUNTER, Box, generate_world, occupancy_grid, reachable
 
 
 def test_same_seed_same_world_and_different_seeds_differ() -> None:
@@ -44,3 +46,11 @@ def test_a_walled_in_goal_is_reported_unreachable() -> None:
 def test_negative_seed_is_refused() -> None:
     with pytest.raises(ValueError, match="seed"):
         generate_world(-1)
+
+
+def test_a_box_is_found_ahead_at_its_near_edge_and_missed_when_looking_away() -> None:
+    counter = Box("counter", x=1.75, y=0.55, half_x=0.2, half_y=0.7, height=0.25)
+    assert counter.distance_along(1.3, 0.7, 0.0) == pytest.approx(0.25)
+    assert counter.distance_along(1.3, 0.7, math.pi) == math.inf
+    assert counter.distance_along(1.75, -0.5, math.pi / 2) == pytest.approx(0.35)
+    assert counter.distance_along(1.75, 0.5, 1.0) == 0.0  # standing inside it (in plan view)

@@ -1,0 +1,155 @@
+"""Where to stand to pick an object up, whether it is in reach from here, and the arm moves that grasp it.
+
+All measured in simulation with humanoid_v1's right hand (scratch trials, seeds 0-6): the OP3 arm cannot bring
+its hand nearer than about 0.25 m in front of the feet at shoulder height, so the object goes 0.31 m ahead and
+0.11 m to the right of the feet centre; the hand comes from 6 cm behind and 3 cm above and closes with the object
+between the middles of the finger pads (the palm clears it).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from robot.manipulation.arm_motion import HandMove, JointMove, Move
+from robot.manipulation.reach_ik import trunk_height_for
+from robot.model import humanoid_v1
+
+# The object in the feet frame when standing to grasp it with the right hand (m).
+GRASP_OFFSET = (0.31, -0.11)
+# What the arm reaches from a stance (feet frame, m): beyond this the stance is corrected first.
+# (scratch trials: grasps at 0.27/0.35 ahead and -0.19/-0.03 to the side all lifted the mug 6 cm)
+REACH_X = (0.27, 0.35)
+REACH_Y = (-0.19, -0.03)
+REACH_SURFACE_Z = (0.15, 0.32)
+APPROACH_BACK_M = 0.06
+APPROACH_UP_M = 0.03
+# The hand's grasp point goes this far past the object's axis (m): the finger pads are centred 6 mm behind it and
+# a grasp point on the axis left the object at the fingertips, squeezed out when the arm moved (the palm is 2 cm
+# behind the pads: it does not touch a 35 mm mug).
+PAST_AXIS_M = 0.006
+LIFT_M = 0.05
+# Finger opening (each finger, m) below which the gripper closed on nothing.
+EMPTY_GRIP_M = 0.004
+
+
+@dataclass(frozen=True)
+class Stance:
+    x: float
+    y: float
+    yaw: float
+
+
+def grasp_stance(object_xy: tuple[float, float], facing_yaw: float) -> Stance:
+    """The pose to stand at, facing `facing_yaw`, to have the object at GRASP_OFFSET from the feet."""
+    c, s = math.cos(facing_yaw), math.sin(facing_yaw)
+    dx, dy = GRASP_OFFSET
+    return Stance(object_xy[0] - (c * dx - s * dy), object_xy[1] - (s * dx + c * dy), facing_yaw)
+
+
+def reach_problem(object_in_feet: np.ndarray) -> str | None:
+    """Why the object (feet frame) is out of the right hand's reach from here, or None if it is within reach."""
+    x, y, z = (float(v) for v in object_in_feet)
+    if not REACH_X[0] <= x <= REACH_X[1]:
+        return f"{x:.2f} m ahead (reach {REACH_X[0]:.2f}-{REACH_X[1]:.2f} m)"
+    if not REACH_Y[0] <= y <= REACH_Y[1]:
+        return f"{y:+.2f} m to the side (reach {REACH_Y[0]:+.2f} to {REACH_Y[1]:+.2f} m)"
+    if not REACH_SURFACE_Z[0] <= z <= REACH_SURFACE_Z[1]:
+        return f"on a surface {z:.2f} m high (reach {REACH_SURFACE_Z[0]:.2f}-{REACH_SURFACE_Z[1]:.2f} m)"
+    return None
+
+
+def grasp_height(object_height: float) -> float:
+    """Where on the object the fingers close, above its base (m): a little above the middle, under the rim."""
+    return min(0.6 * object_height, object_height - 0.015)
+
+
+RAISE_SIDEWAYS = {"r_sho_roll": 0.0, "r_sho_pitch": 0.0, "r_el": 0.0, "r_wrist": 0.0,
+                  "l_sho_pitch": -0.3, "l_sho_roll": 1.3, "l_el": 0.8}  # fmt: skip
+
+
+def arm_out_moves() -> list[Move]:
+    """From arms down to the right hand in front at shoulder height, clear of what stands on the surface: raise the
+    arm sideways (opening the gripper out there), turn it flat, fold the elbow, swing it forward (a straight hand
+    path would sweep through the counter). The left arm lifts its hand clear of the floor for the crouch."""
+    return [
+        JointMove({**RAISE_SIDEWAYS, "r_grip": humanoid_v1.FINGER_TRAVEL}, 1.0, "raise sideways"),
+        JointMove({"r_sho_pitch": 1.57}, 0.8, "turn flat"),
+        JointMove({"r_el": 1.8, "r_wrist": -0.9}, 0.8, "fold"),
+        JointMove({"r_sho_roll": -0.8}, 1.0, "swing forward"),
+    ]
+
+
+def grasp_moves(object_in_feet: np.ndarray, object_height: float) -> tuple[list[Move], np.ndarray]:
+    """Pre-grasp, approach and close on an object whose base centre is at `object_in_feet`; returns the moves and
+    the hand's grasp point."""
+    grasp = np.asarray(object_in_feet, dtype=float) + np.array([PAST_AXIS_M, 0.0, grasp_height(object_height)])
+    height = trunk_height_for(float(grasp[2]))
+    open_ = humanoid_v1.FINGER_TRAVEL
+    pre = grasp + np.array([-APPROACH_BACK_M, 0.0, APPROACH_UP_M])
+    moves: list[Move] = [
+        HandMove(tuple(pre), 1.5, open_, height, label="pre-grasp"),
+        HandMove(tuple(grasp), 1.5, open_, height, label="approach"),
+        HandMove(tuple(grasp), 1.0, 0.0, height, label="close"),
+    ]
+    return moves, grasp
+
+
+def lift_moves(grasp: np.ndarray, object_height: float) -> list[Move]:
+    lifted = np.asarray(grasp) + np.array([0.0, 0.0, LIFT_M])
+    return [HandMove(tuple(lifted), 1.5, 0.0, trunk_height_for(float(grasp[2])), label="lift")]
+
+
+# The arm held in for walking: folded, flat at shoulder height, the hand 0.25 m ahead of the feet and the gripper's
+# closing axis across the body (the object upright). Forward kinematics at the standing posture.
+CARRY_ARM = {"r_sho_pitch": 1.5, "r_sho_roll": -0.5, "r_el": 2.0, "r_wrist": -1.0}
+CARRY_HAND_AHEAD_M = 0.25
+
+
+def carry_moves() -> list[Move]:
+    """From holding the object up where it was grasped to carrying it close to the body (less to sway when
+    walking, nothing sticking out to sweep into furniture when turning); the left arm goes back down."""
+    stand = humanoid_v1.stand_posture()
+    left_arm_down = {n: stand[n] for n in RAISE_SIDEWAYS if n.startswith("l_")}
+    return [JointMove({**CARRY_ARM, **left_arm_down}, 1.2, "carry")]
+
+
+PLACE_ABOVE_M = 0.04  # the object is carried over its spot this high above where it will stand, then lowered
+SET_DOWN_ABOVE_M = 0.004  # released this far above the surface: the fingers do not scrape it
+
+
+def place_moves(spot_in_feet: np.ndarray, object_height: float) -> tuple[list[Move], np.ndarray]:
+    """Carry the held object over the spot (feet frame, on the surface), lower it, let go and back away; returns the
+    moves and the hand's release point."""
+    release = np.asarray(spot_in_feet, dtype=float) + np.array(
+        [PAST_AXIS_M, 0.0, grasp_height(object_height) + SET_DOWN_ABOVE_M]
+    )
+    height = trunk_height_for(float(release[2]))
+    above = release + np.array([0.0, 0.0, PLACE_ABOVE_M])
+    left_arm_up = {n: v for n, v in RAISE_SIDEWAYS.items() if n.startswith("l_")}
+    moves: list[Move] = [
+        JointMove(left_arm_up, 0.8, "left hand up"),  # clear of the floor in the crouch
+        HandMove(tuple(above), 2.0, 0.0, height, label="over the spot"),
+        HandMove(tuple(release), 1.5, 0.0, height, label="set down"),
+        *release_moves(release),
+    ]
+    return moves, release
+
+
+CLEAR_BACK_M = 0.10
+CLEAR_UP_M = 0.10
+
+
+def release_moves(grasp: np.ndarray) -> list[Move]:
+    """Open, back away and rise well clear (after a failed grasp, or after placing): standing up afterwards moves
+    the hand down and forward by up to 5 cm (measured), which knocked a just-placed mug over."""
+    g = np.asarray(grasp)
+    height = trunk_height_for(float(g[2]))
+    open_ = humanoid_v1.FINGER_TRAVEL
+    return [
+        HandMove(tuple(g), 0.8, open_, height, label="open"),
+        HandMove(tuple(g + np.array([-APPROACH_BACK_M, 0.0, APPROACH_UP_M])), 1.2, open_, height, label="back away"),
+        HandMove(tuple(g + np.array([-CLEAR_BACK_M, 0.0, CLEAR_UP_M])), 1.0, 0.0, height, label="clear"),
+    ]

@@ -1,0 +1,111 @@
+"""`pick_object`: stand where the object is in reach, look at it again standing still, reach, grasp, lift, check.
+
+Failures name their cause, so the executor and the operator can replan: "not found", "unreachable", "grasp
+failed: closed on nothing", "grasp slipped", "fell", "path blocked".
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from robot.manipulation.arm_motion import Move
+from robot.manipulation.grasp_plan import (
+    EMPTY_GRIP_M,
+    LIFT_M,
+    Stance,
+    arm_out_moves,
+    grasp_moves,
+    grasp_stance,
+    lift_moves,
+    reach_problem,
+    release_moves,
+)
+
+# How many times the stance is corrected from a fresh sighting before the object counts as unreachable.
+STANCE_ATTEMPTS = 3
+# The lifted object must have risen at least this much (m) with the hand.
+MIN_RISE_M = 0.03
+
+
+class PickFailed(RuntimeError):
+    pass
+
+
+class PickBody(Protocol):
+    """What picking needs of the robot (the worker implements it; tests may fake it)."""
+
+    def locate(self, name: str) -> np.ndarray | None:
+        """The object's base centre in the map from a fresh sighting while standing still, or None if not seen."""
+
+    def to_feet(self, point_in_map: np.ndarray) -> np.ndarray: ...
+
+    def go_to(self, stance: Stance) -> None:
+        """Walk to the stance (raises PickFailed with the navigation's reason)."""
+
+    def facing_for(self, point_in_map: np.ndarray) -> float:
+        """The heading to grasp from: square to the surface the object is on."""
+
+    def arm(self, moves: Sequence[Move]) -> None:
+        """Play arm moves (the arm takes over the joints first) and return when they are done."""
+
+    def grip_opening(self) -> float:
+        """Measured opening of each finger (m)."""
+
+    def stand_holding(self) -> None:
+        """Stand up with the arm as it is, and hand the legs back to walking."""
+
+    def stow_arm(self) -> None:
+        """Arm back down, gripper open, standing (after a failure)."""
+
+
+@dataclass(frozen=True)
+class PickReport:
+    name: str
+    grip_m: float
+    rise_m: float
+    stance_corrections: int
+
+
+def pick(name: str, height: float, body: PickBody) -> PickReport:
+    """Pick up the object `name` (`height` tall); on failure the arm is stowed and PickFailed says why."""
+    corrections = 0
+    seen = body.locate(name)
+    if seen is None:
+        raise PickFailed(f"not found: the {name} is not where it was seen")
+    for attempt in range(STANCE_ATTEMPTS + 1):
+        in_feet = body.to_feet(seen)
+        problem = reach_problem(in_feet)
+        if problem is None:
+            break
+        if attempt == STANCE_ATTEMPTS:
+            raise PickFailed(f"unreachable: the {name} is {problem} after {corrections} stance corrections")
+        body.go_to(grasp_stance((float(seen[0]), float(seen[1])), body.facing_for(seen)))
+        corrections += 1
+        seen = body.locate(name)
+        if seen is None:
+            raise PickFailed(f"not found: lost sight of the {name} at the counter")
+    moves, grasp = grasp_moves(in_feet, height)
+    try:
+        body.arm([*arm_out_moves(), *moves])
+        grip = body.grip_opening()
+        if grip < EMPTY_GRIP_M:
+            raise PickFailed(f"grasp failed: the gripper closed on nothing ({grip * 2000:.0f} mm open)")
+        body.arm(lift_moves(grasp, height))
+        lifted = body.locate(name)
+        rise = float(lifted[2] - seen[2]) if lifted is not None else float("nan")
+        grip = body.grip_opening()
+        if grip < EMPTY_GRIP_M or (lifted is not None and rise < MIN_RISE_M):
+            raise PickFailed(
+                f"grasp slipped: the {name} did not rise with the hand (rose {rise * 100:.1f} of "
+                f"{LIFT_M * 100:.0f} cm, gripper {grip * 2000:.0f} mm open)"
+            )
+    except PickFailed:
+        body.arm(release_moves(grasp))
+        body.stow_arm()
+        raise
+    body.stand_holding()
+    return PickReport(name, grip, rise, corrections)

@@ -1,0 +1,109 @@
+"""`place_object`: stand where the spot is in the right hand's reach, carry the held object over it, lower it, let go,
+and check it stands where it was put.
+
+Failures name their cause: "unreachable", "not found" (the object is not where it was let go), "fell".
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from robot.manipulation.arm_motion import Move
+from robot.manipulation.grasp_plan import Stance, grasp_stance, place_moves, reach_problem
+from robot.manipulation.pick import STANCE_ATTEMPTS
+from robot.model.world import Box
+
+# Where the object must be seen after letting go: near the spot (the robot's pose estimate may have been
+# corrected by a few cm between choosing the spot and looking again), and standing on the surface (a mug lying on
+# its side shows its base centre 1.75 cm higher).
+PLACED_WITHIN_M = 0.10
+PLACED_HEIGHT_TOLERANCE_M = 0.012
+
+
+class PlaceFailed(RuntimeError):
+    pass
+
+
+class PlaceBody(Protocol):
+    """What placing needs of the robot (the worker implements it; tests may fake it)."""
+
+    def locate(self, name: str, near: np.ndarray | None = None) -> np.ndarray | None:
+        """The object's base centre in the map from a fresh sighting (looking at `near` if given), or None."""
+
+    def to_feet(self, point_in_map: np.ndarray) -> np.ndarray: ...
+
+    def go_to(self, stance: Stance) -> None:
+        """Walk to the stance (raises PickFailed or PlaceFailed with the navigation's reason)."""
+
+    def arm(self, moves: list[Move]) -> None: ...
+
+    def stow_arm(self) -> None:
+        """Arm back down, gripper closed, standing."""
+
+
+@dataclass(frozen=True)
+class PlaceReport:
+    name: str
+    position: tuple[float, float, float]  # where the object was seen after letting go (map, m)
+    error_m: float  # from the spot it was meant for
+    stance_corrections: int
+
+
+def place(name: str, height: float, spot: np.ndarray, facing_yaw: float, body: PlaceBody) -> PlaceReport:
+    """Put the held object `name` (`height` tall) down with its base centre at `spot` (map, on a surface)."""
+    spot = np.asarray(spot, dtype=float)
+    corrections = 0
+    for attempt in range(STANCE_ATTEMPTS + 1):
+        in_feet = body.to_feet(spot)
+        problem = reach_problem(in_feet)
+        if problem is None:
+            break
+        if attempt == STANCE_ATTEMPTS:
+            raise PlaceFailed(f"unreachable: the spot is {problem} after {corrections} stance corrections")
+        body.go_to(grasp_stance((float(spot[0]), float(spot[1])), facing_yaw))
+        corrections += 1
+    moves, _ = place_moves(in_feet, height)
+    body.arm(moves)
+    body.stow_arm()
+    seen = body.locate(name, near=spot)
+    if seen is None:
+        raise PlaceFailed(f"not found: the {name} is not where it was let go")
+    error = math.dist(seen[:2], spot[:2])
+    if error > PLACED_WITHIN_M or abs(float(seen[2] - spot[2])) > PLACED_HEIGHT_TOLERANCE_M:
+        raise PlaceFailed(
+            f"the {name} did not stay where it was put: seen {error * 100:.0f} cm away, "
+            f"{(seen[2] - spot[2]) * 100:+.0f} cm above the surface"
+        )
+    return PlaceReport(name, (float(seen[0]), float(seen[1]), float(seen[2])), error, corrections)
+
+
+# Where on a surface to put something down: this far in from its front edge (as far as the mugs stand on the
+# counter), this far from anything else on it and from its sides.
+PLACE_DEPTH_M = 0.07
+SPACING_M = 0.08
+EDGE_MARGIN_M = 0.05
+
+
+def choose_spot(surface: Box, approach: tuple[float, float, float],
+                occupied: list[tuple[float, float]]) -> np.ndarray | None:  # fmt: skip
+    """A free spot on `surface` in front of the `approach` pose, nearest the robot's line of approach, clear of the
+    `occupied` points; None if the surface is full there."""
+    x, y, yaw = approach
+    edge = surface.distance_along(x, y, yaw)
+    if not math.isfinite(edge):
+        return None
+    ahead = np.array([math.cos(yaw), math.sin(yaw)])
+    left = np.array([-ahead[1], ahead[0]])
+    base = np.array([x, y]) + (edge + PLACE_DEPTH_M) * ahead
+    for k in (0, 1, -1, 2, -2, 3, -3):
+        p = base + k * SPACING_M * left
+        if not surface.contains(float(p[0]), float(p[1]), -EDGE_MARGIN_M):
+            continue
+        if any(math.dist(p, o) < SPACING_M for o in occupied):
+            continue
+        return np.array([p[0], p[1], surface.height])
+    return None

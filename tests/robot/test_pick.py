@@ -1,0 +1,65 @@
+"""`pick_object`: where the robot stands to grasp, what is in reach, and the real grasp in physics."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from robot.interface import ExecutePlan, PlanState
+from robot.manipulation.grasp_plan import GRASP_OFFSET, grasp_stance, reach_problem
+from robot.model.scene import object_body_name
+from robot.model.world import generate_world
+from robot.sim.backend import MujocoSimBackend
+from robot.worker import RobotWorker
+
+
+@pytest.mark.parametrize("yaw", [0.0, math.pi / 2, -2.5])
+def test_the_grasp_stance_puts_the_object_ahead_and_to_the_right_of_the_feet(yaw: float) -> None:
+    stance = grasp_stance((1.6, 0.7), yaw)
+    dx, dy = 1.6 - stance.x, 0.7 - stance.y
+    c, s = math.cos(yaw), math.sin(yaw)
+    ahead, left = c * dx + s * dy, -s * dx + c * dy
+    assert (ahead, left) == pytest.approx(GRASP_OFFSET, abs=1e-9)
+    assert stance.yaw == yaw
+
+
+def test_reach_says_what_is_out_of_reach() -> None:
+    assert reach_problem(np.array([0.31, -0.11, 0.25])) is None
+    assert "ahead" in reach_problem(np.array([0.50, -0.11, 0.25]))
+    assert "side" in reach_problem(np.array([0.31, 0.10, 0.25]))
+    assert "high" in reach_problem(np.array([0.31, -0.11, 0.60]))
+
+
+@pytest.mark.slow
+def test_the_mug_is_picked_from_the_counter_with_contacts_and_held_up_in_the_hand() -> None:
+    """The capstone in physics, checked against the simulator's truth (the mug's body is free: nothing welds or
+    attaches it), after the robot has stood up with it and brought it in close for carrying."""
+    layout = generate_world(0)
+    backend = MujocoSimBackend(layout)
+    worker = RobotWorker(layout, backend=backend, realtime=False)
+    worker.start()
+    try:
+        steps = [
+            {"action": "navigate_to", "args": {"target": "kitchen counter"}},
+            {"action": "detect_object", "args": {"object": "red mug"}},
+            {"action": "pick_object", "args": {"object": "red mug"}},
+        ]
+        assert worker.submit(ExecutePlan({"steps": steps})).accepted
+        assert worker.wait_for(lambda s: s.plan is not None and s.plan.state != PlanState.RUNNING, 600)
+        state = worker.state()
+        assert state.plan.state == PlanState.SUCCEEDED, [s.detail for s in state.plan.steps]
+        assert "holding the red mug" in state.plan.steps[2].detail
+        assert state.held_object == "red mug" and not state.fallen
+        counter = next(p for p in layout.places if p.name == "kitchen counter").surface
+        mug = backend.data.body(object_body_name("red mug")).xpos
+        hand = backend.data.site("right_hand").xpos
+        assert math.dist(mug[:2], hand[:2]) < 0.03  # between the fingers
+        assert mug[2] > counter.height + 0.04  # lifted clear of the counter
+        trunk = backend.data.qpos[:2]
+        assert math.dist(mug[:2], trunk) < 0.30  # and held in close to the body, ready to walk
+        picked = next(e for e in worker.recent_events() if e.kind == "manipulation/picked")
+        assert picked.data["rise_m"] > 0.03
+    finally:
+        worker.stop()

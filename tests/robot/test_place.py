@@ -1,0 +1,99 @@
+"""`place_object`: where on a surface the held object goes, and the placing procedure's checks and failures."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from robot.manipulation.arm_motion import HandMove, JointMove, Move
+from robot.manipulation.grasp_plan import GRASP_OFFSET, Stance
+from robot.manipulation.place import PLACE_DEPTH_M, SPACING_M, PlaceFailed, choose_spot, place
+from robot.model.world import Box
+
+TABLE = Box("table", x=-1.2, y=0.75, half_x=0.3, half_y=0.25, height=0.2)
+FACING_TABLE = (-1.2, 0.38, math.pi / 2)  # in front of its near edge (y = 0.5), facing it
+
+
+def test_the_spot_is_in_front_of_the_robot_a_little_in_from_the_edge_at_the_surface_height() -> None:
+    spot = choose_spot(TABLE, FACING_TABLE, [])
+    assert spot is not None
+    assert spot == pytest.approx([-1.2, 0.5 + PLACE_DEPTH_M, 0.2])
+
+
+def test_the_spot_moves_aside_from_what_already_stands_there() -> None:
+    spot = choose_spot(TABLE, FACING_TABLE, [(-1.2, 0.57)])
+    assert spot is not None
+    assert math.dist(spot[:2], (-1.2, 0.57)) >= SPACING_M - 1e-9
+    assert spot[1] == pytest.approx(0.5 + PLACE_DEPTH_M)  # still at the same depth, only sideways
+    assert TABLE.contains(float(spot[0]), float(spot[1]))
+
+
+def test_a_full_surface_or_one_not_ahead_has_no_spot() -> None:
+    along_the_edge = [(-1.5 + 0.04 * i, 0.57) for i in range(16)]
+    assert choose_spot(TABLE, FACING_TABLE, along_the_edge) is None
+    assert choose_spot(TABLE, (-1.2, 0.38, -math.pi / 2), []) is None  # facing away from it
+
+
+class FakeBody:
+    """A robot that stands where it is told (feet frame = map shifted to its feet, facing +x) and sees the placed
+    object wherever the test says."""
+
+    def __init__(self, feet: tuple[float, float], seen_after: np.ndarray | None) -> None:
+        self.feet = np.array([feet[0], feet[1], 0.0])
+        self.seen_after = seen_after
+        self.stances: list[Stance] = []
+        self.moves: list[Move] = []
+        self.stowed = False
+
+    def locate(self, name: str, near: np.ndarray | None = None) -> np.ndarray | None:
+        return self.seen_after
+
+    def to_feet(self, point_in_map: np.ndarray) -> np.ndarray:
+        return np.asarray(point_in_map, dtype=float) - self.feet
+
+    def go_to(self, stance: Stance) -> None:
+        self.stances.append(stance)
+        self.feet = np.array([stance.x, stance.y, 0.0])
+
+    def arm(self, moves: list[Move]) -> None:
+        self.moves.extend(moves)
+
+    def stow_arm(self) -> None:
+        self.stowed = True
+
+
+SPOT = np.array([1.0, 0.5, 0.25])
+IN_REACH = (SPOT[0] - GRASP_OFFSET[0], SPOT[1] - GRASP_OFFSET[1])
+
+
+def test_placing_lowers_the_object_onto_the_spot_then_opens_backs_away_and_stows_the_arm() -> None:
+    body = FakeBody(IN_REACH, seen_after=SPOT + np.array([0.01, 0.0, 0.0]))
+    report = place("red mug", 0.05, SPOT, 0.0, body)
+    assert body.stances == []  # already in reach: no stance correction
+    labels = [m.label for m in body.moves]
+    assert labels.index("over the spot") < labels.index("set down") < labels.index("open") < labels.index("clear")
+    set_down = next(m for m in body.moves if m.label == "set down")
+    assert isinstance(set_down, HandMove) and set_down.gripper == 0.0  # still holding while lowering
+    assert set_down.target[2] == pytest.approx(SPOT[2] - body.feet[2] + 0.03 + 0.004, abs=1e-3)
+    opened = next(m for m in body.moves if m.label == "open")
+    assert isinstance(opened, HandMove) and opened.gripper > 0.02
+    assert isinstance(body.moves[0], JointMove)  # the other hand is lifted clear of the floor first
+    assert body.stowed
+    assert report.error_m == pytest.approx(0.01) and report.stance_corrections == 0
+
+
+def test_an_out_of_reach_spot_is_walked_up_to_first() -> None:
+    body = FakeBody((IN_REACH[0] - 0.2, IN_REACH[1] + 0.1), seen_after=SPOT)
+    report = place("red mug", 0.05, SPOT, 0.0, body)
+    assert len(body.stances) == 1 and report.stance_corrections == 1
+    assert (body.stances[0].x, body.stances[0].y) == pytest.approx(IN_REACH)
+
+
+def test_an_object_not_seen_where_it_was_let_go_is_a_failure_that_says_so() -> None:
+    with pytest.raises(PlaceFailed, match="not found"):
+        place("red mug", 0.05, SPOT, 0.0, FakeBody(IN_REACH, seen_after=None))
+    fell_off = SPOT + np.array([0.0, 0.08, -0.25])
+    with pytest.raises(PlaceFailed, match="did not stay where it was put"):
+        place("red mug", 0.05, SPOT, 0.0, FakeBody(IN_REACH, seen_after=fell_off))
