@@ -30,9 +30,11 @@ SUCCESS_BARS = {"pick": 0.90, "bring": 0.85, "blocked": 0.90}
 BLOCK_AFTER_M = 0.5
 BLOCK_AHEAD_M = 0.6
 BLOCK_MIN_LEFT_M = 0.5
+BLOCK_MAP_MARGIN_M = 0.0  # more (for the lidar map's cells and noise) found no place at all on seeds 0-3
 MEDIAN_SIM_BAR_S = 90.0
 SETTLE_SIM_S = 0.5
 TRUTH_FAILURE = "the plan succeeded, but the simulator's truth disagrees: the mug is not where it should be"
+NO_BOX = "not a blocked-path run: no point on the path where a box leaves a way round"
 UPRIGHT_DEG = 15.0  # a mug tilted further than this has toppled
 
 
@@ -52,7 +54,7 @@ def run_task(task: str, seed: int, timeout_s: float = 600.0) -> dict[str, Any]:
     try:
         worker.wait_for(lambda s: s.sim_time_s >= SETTLE_SIM_S, timeout_s)
         reply = worker.submit(RunCommand(TASKS[task]))
-        blocker = _PathBlocker(worker) if task == "blocked" else None
+        blocker = _PathBlocker(worker, layout) if task == "blocked" else None
         finished = reply.accepted and worker.wait_for(
             lambda s: (
                 (blocker is None or blocker.watch(s))
@@ -83,16 +85,19 @@ def run_task(task: str, seed: int, timeout_s: float = 600.0) -> dict[str, Any]:
         truth_ok = bool(table.contains(float(mug_position[0]), float(mug_position[1]))
                         and abs(mug_position[2] - table.height) < 0.01 and mug_tilt < UPRIGHT_DEG)  # fmt: skip
     failed_step = next((s for s in state.plan.steps if s.state not in ("succeeded",)), None) if state.plan else None
+    untested = blocker is not None and blocker.dropped_at is None  # no box was dropped: not a blocked-path run
     return {
         "task": task,
         "seed": seed,
-        "success": bool(plan_ok and truth_ok and not state.fallen),
+        "success": bool(plan_ok and truth_ok and not state.fallen and not untested),
         "plan_succeeded": plan_ok,
         "truth_ok": truth_ok,
         "fell": bool(state.fallen),
         "sim_s": round(state.sim_time_s, 2),
         "wall_s": round(wall, 2),
-        "failure": None if failed_step is None else f"{failed_step.action}: {failed_step.detail}",
+        "failure": NO_BOX
+        if untested
+        else (None if failed_step is None else f"{failed_step.action}: {failed_step.detail}"),
         "mug": [round(float(v), 3) for v in mug_position],
         "mug_tilt_deg": round(mug_tilt, 1),
         "replans": int(replans),
@@ -101,10 +106,12 @@ def run_task(task: str, seed: int, timeout_s: float = 600.0) -> dict[str, Any]:
 
 
 class _PathBlocker:
-    """Drops a box across the path the robot is following, once, a little ahead of it (the blocked variant)."""
+    """Drops a box across the path the robot is following, once, a little ahead of it (the blocked variant), where
+    the goal stays reachable around it: a box in the only doorway would test nothing but giving up."""
 
-    def __init__(self, worker: Any) -> None:
+    def __init__(self, worker: Any, layout: Any) -> None:
         self._worker = worker
+        self._layout = layout
         self.dropped_at: list[float] | None = None
 
     def watch(self, state: Any) -> bool:
@@ -123,10 +130,24 @@ class _PathBlocker:
         progress = _nearest_arc(path, arc, here)
         if progress < BLOCK_AFTER_M or arc[-1] - (progress + BLOCK_AHEAD_M) < BLOCK_MIN_LEFT_M:
             return True
-        x, y = _point_at(path, arc, progress + BLOCK_AHEAD_M)
-        if self._worker.submit(PlaceObstacle(x, y)).accepted:
-            self.dropped_at = [round(x, 3), round(y, 3)]
+        for ahead in np.arange(BLOCK_AHEAD_M, arc[-1] - progress - BLOCK_MIN_LEFT_M, 0.1):
+            x, y = _point_at(path, arc, progress + float(ahead))
+            if self._leaves_a_way(state, (x, y), tuple(path[-1])):
+                if self._worker.submit(PlaceObstacle(x, y)).accepted:
+                    self.dropped_at = [round(x, 3), round(y, 3)]
+                break
         return True
+
+    def _leaves_a_way(self, state: Any, box: tuple[float, float], goal: tuple[float, float]) -> bool:
+        from dataclasses import replace
+
+        from robot.model.world import ROBOT_RADIUS, Box, reachable
+        from robot.navigation.navigator import CLEARANCE_M
+
+        inflate = ROBOT_RADIUS + CLEARANCE_M + BLOCK_MAP_MARGIN_M  # as the navigator grows its map, and some
+        here = replace(self._layout, robot_start=(*state.base_position[:2], state.base_yaw_rad))
+        blocked = replace(here, obstacles=(*here.obstacles, Box("blocker", box[0], box[1], 0.07, 0.07, 0.3)))
+        return reachable(blocked, [goal], inflate) if reachable(here, [goal], inflate) else False
 
 
 def _nearest_arc(path: np.ndarray, arc: np.ndarray, point: np.ndarray) -> float:

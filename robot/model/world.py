@@ -225,9 +225,10 @@ def occupancy_grid(layout: WorldLayout, inflate: float = ROBOT_RADIUS) -> tuple[
     return blocked, x0, y0
 
 
-def reachable(layout: WorldLayout, goals: list[tuple[float, float]]) -> bool:
-    """True when every goal cell is connected to the start cell (4-connected flood fill)."""
-    grid, x0, y0 = occupancy_grid(layout)
+def reachable(layout: WorldLayout, goals: list[tuple[float, float]], inflate: float = ROBOT_RADIUS) -> bool:
+    """True when every goal cell is connected to the start cell (4-connected flood fill), with everything grown by
+    `inflate` (the robot's footprint, or more)."""
+    grid, x0, y0 = occupancy_grid(layout, inflate)
 
     def cell(x: float, y: float) -> tuple[int, int]:
         return round((x - x0) / GRID_RESOLUTION), round((y - y0) / GRID_RESOLUTION)
