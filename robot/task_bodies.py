@@ -125,6 +125,12 @@ class NavBodyOfWorker:
         velocity = clip_velocity(Velocity(vx, vy, yaw_rate), self._worker._loco.velocity.limits)
         self._worker._set_task_velocity(velocity)
 
+    def halt_here(self) -> None:
+        worker = self._worker
+        worker._set_task_velocity(Velocity())
+        with worker._lock:
+            worker._stop_promptly = True
+
     def wait(self, seconds: float) -> None:
         self._ctx.wait_sim(seconds)
 

@@ -30,6 +30,9 @@ SUCCESS_BARS = {"pick": 0.90, "bring": 0.85, "blocked": 0.90}
 BLOCK_AFTER_M = 0.5
 BLOCK_AHEAD_M = 0.6
 BLOCK_MIN_LEFT_M = 0.5
+# Offsets of the box from the path, across it: each leaves the path inside the box's grown footprint (the box's half
+# width plus the navigator's inflation is 0.3 m), so the robot must replan round it.
+BLOCK_SIDE_OFFSETS_M = (0.0, 0.06, -0.06, 0.12, -0.12)
 BLOCK_MAP_MARGIN_M = 0.0  # more (for the lidar map's cells and noise) found no place at all on seeds 0-3
 MEDIAN_SIM_BAR_S = 90.0
 SETTLE_SIM_S = 0.5
@@ -131,11 +134,18 @@ class _PathBlocker:
         if progress < BLOCK_AFTER_M or arc[-1] - (progress + BLOCK_AHEAD_M) < BLOCK_MIN_LEFT_M:
             return True
         for ahead in np.arange(BLOCK_AHEAD_M, arc[-1] - progress - BLOCK_MIN_LEFT_M, 0.1):
-            x, y = _point_at(path, arc, progress + float(ahead))
-            if self._leaves_a_way(state, (x, y), tuple(path[-1])):
-                if self._worker.submit(PlaceObstacle(x, y)).accepted:
-                    self.dropped_at = [round(x, 3), round(y, 3)]
-                break
+            s = progress + float(ahead)
+            x, y = _point_at(path, arc, s)
+            tx, ty = np.subtract(_point_at(path, arc, s + 0.05), _point_at(path, arc, s - 0.05))
+            normal = np.array([-ty, tx]) / max(math.hypot(tx, ty), 1e-9)
+            # on the path, else a little to one side: still across the robot's way (the path runs through the
+            # box's grown footprint), but beside a gap the path could not have used before
+            for offset in BLOCK_SIDE_OFFSETS_M:
+                box = (x + offset * normal[0], y + offset * normal[1])
+                if self._leaves_a_way(state, box, tuple(path[-1])):
+                    if self._worker.submit(PlaceObstacle(*box)).accepted:
+                        self.dropped_at = [round(box[0], 3), round(box[1], 3)]
+                    return True
         return True
 
     def _leaves_a_way(self, state: Any, box: tuple[float, float], goal: tuple[float, float]) -> bool:

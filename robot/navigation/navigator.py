@@ -27,7 +27,7 @@ BLOCKED_WAIT_S = 3.0  # a path found blocked is retried for this long before giv
 STUCK_S = 20.0
 # Final approach (gains of the closed-loop walking prototype's go-to-pose, shared FINDINGS.md)
 APPROACH_GAIN = (0.8, 0.8, 1.2)
-APPROACH_LIMIT = (0.08, 0.05, 0.4)
+APPROACH_LIMIT = (0.08, 0.05, 0.6)
 ARRIVED_M = 0.02
 ARRIVED_RAD = math.radians(3.0)
 # Where the robot may come to rest: the two steps in place that stop the walk move it up to a few cm.
@@ -51,6 +51,10 @@ class NavBody(Protocol):
 
     def drive(self, vx: float, vy: float, yaw_rate: float) -> None:
         """Velocity for the legs, in the robot's frame (a deadman: repeat it every control period)."""
+
+    def halt_here(self) -> None:
+        """Stop where the robot is, without first walking off the lag between where the legs were asked to be and
+        where they are (the final approach closes that loop itself; walking it off overshoots the goal)."""
 
     def wait(self, seconds: float) -> None:
         """Let this much simulated time pass (raises when the plan is cancelled)."""
@@ -83,8 +87,13 @@ def plan_path(costmap: Costmap, start: tuple[float, float], goal: tuple[float, f
 
 
 def _path_blocked(costmap: Costmap, follower: PathFollower) -> bool:
-    """Whether the rest of the path (from the robot's progress on) crosses a blocked cell."""
+    """Whether the rest of the path (from the robot's progress on) crosses a blocked cell. A robot standing in an
+    obstacle's grown margin (beside furniture) starts its path there: that first stretch does not count, or every
+    new path would be found blocked at once."""
     s = follower.progress + 0.15  # the cells right under the robot may be grown over by a nearby obstacle
+    if costmap.blocked_at(*follower.point_at(follower.progress)):
+        while s < follower.length - 0.1 and costmap.blocked_at(*follower.point_at(s)):
+            s += costmap.resolution / 2
     while s < follower.length - 0.1:
         if costmap.blocked_at(*follower.point_at(s)):
             return True
@@ -108,7 +117,8 @@ class Navigator:
         report = NavigationReport()
         started = self._now()
         self._goal = approach if isinstance(approach, tuple) else (*staging, self.body.pose()[2])
-        self._follow_path(staging, report)
+        # walking on into the approach, without stopping at the staging point, saves a stop and a restart
+        self._follow_path(staging, report, stop_at_end=approach is None)
         if callable(approach):
             approach = approach()
             self._goal = approach
@@ -144,7 +154,7 @@ class Navigator:
             raise NavigationFailed("no map yet: the lidar has not produced one")
         return costmap
 
-    def _follow_path(self, goal: tuple[float, float], report: NavigationReport) -> None:
+    def _follow_path(self, goal: tuple[float, float], report: NavigationReport, stop_at_end: bool = True) -> None:
         body = self.body
         x, y, _ = body.pose()
         path = self._plan_or_wait((x, y), goal)
@@ -171,8 +181,7 @@ class Navigator:
                 last_check = now
                 if _path_blocked(self._costmap(), follower):
                     report.walked_m += follower.progress
-                    self._stop()
-                    path = self._plan_or_wait((x, y), goal)
+                    path = self._replan((x, y), goal)
                     report.replans += 1
                     report.path = tuple(path)
                     self._on_update(NavigationState(self._goal, report.path, report.replans))
@@ -181,7 +190,17 @@ class Navigator:
                     continue
             body.drive(command.vx, command.vy, command.yaw_rate)
             body.wait(CONTROL_PERIOD_S)
-        self._stop()
+        if stop_at_end:
+            self._stop()
+
+    def _replan(self, start: tuple[float, float], goal: tuple[float, float]) -> list[tuple[float, float]]:
+        """A new path, found without breaking stride when the map has one (a stop and a restart cost about 3 s);
+        otherwise stop and wait for the way to clear."""
+        try:
+            return plan_path(self._costmap(), start, goal)
+        except NavigationFailed:
+            self._stop()
+            return self._plan_or_wait(start, goal)
 
     def _plan_or_wait(self, start: tuple[float, float], goal: tuple[float, float]) -> list[tuple[float, float]]:
         """A path now, or after waiting a little for the way to clear (a person passing), or raise."""
@@ -210,7 +229,7 @@ class Navigator:
             self._check_fall()
             ex, ey, heading_error = _pose_error(body.pose(), goal)
             if math.hypot(ex, ey) < ARRIVED_M and abs(heading_error) < ARRIVED_RAD:
-                self._stop()
+                self._stop(promptly=True)
                 ex, ey, heading_error = _pose_error(body.pose(), goal)
                 if math.hypot(ex, ey) < tolerance and abs(heading_error) < SETTLED_RAD:
                     return
@@ -222,8 +241,10 @@ class Navigator:
         if error > MAX_SETTLE_M:
             raise NavigationFailed(f"stuck: could not settle on the goal pose ({error * 100:.0f} cm off)")
 
-    def _stop(self) -> None:
+    def _stop(self, promptly: bool = False) -> None:
         body = self.body
+        if promptly:
+            body.halt_here()
         for _ in range(100):
             if not body.walking():
                 return

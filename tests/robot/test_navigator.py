@@ -37,6 +37,9 @@ class DriftingBody:
             self.x -= math.sin(self.yaw) * self.drift_m
             self.y += math.cos(self.yaw) * self.drift_m
 
+    def halt_here(self) -> None:
+        self.drive(0.0, 0.0, 0.0)
+
     def wait(self, seconds: float) -> None:
         self.t += seconds
         if self.moving:
