@@ -77,6 +77,7 @@ from robot.manipulation.reach_ik import ReachIK
 from robot.model import humanoid_v1
 from robot.model.scene import scene_xml
 from robot.model.world import ROBOT_RADIUS, Place, WorldLayout
+from robot.navigation.costmap import Costmap
 from robot.navigation.goal import parse_pose_goal
 from robot.navigation.navigator import NavigationFailed, Navigator
 from robot.perception.geometry import matrix_to_quat_wxyz, yaw_of
@@ -448,9 +449,14 @@ class RobotWorker:
             name = self._world_context().resolve_object(step.args["object"]) or step.args["object"]
             remembered = self._perception.memory.get(name)
             if remembered is not None and place.surface.contains(*remembered.position[:2]):
-                stance = grasp_stance(remembered.position[:2], place.approach[2])
+                stance = grasp_stance(remembered.position[:2], place.approach[2], self._map_blocked())
                 return (stance.x, stance.y, stance.yaw)
         return place.approach
+
+    def _map_blocked(self) -> Callable[[float, float], bool] | None:
+        """Whether a map point is taken on the lidar map (obstacles not grown); None before the first map."""
+        grid = self._perception.feed().map if self._perception is not None else None
+        return None if grid is None else Costmap.from_map(grid, 0.0).blocked_at
 
     def _detect_object(self, args: dict[str, str], ctx: ExecutionContext) -> str:
         """Look for the object (head, then body); found: its 3D position goes into the world memory."""

@@ -19,7 +19,6 @@ from robot.manipulation.grasp_plan import (
     Stance,
     arm_out_moves,
     grasp_moves,
-    grasp_stance,
     lift_moves,
     reach_problem,
     release_moves,
@@ -46,8 +45,12 @@ class PickBody(Protocol):
     def go_to(self, stance: Stance) -> None:
         """Walk to the stance (raises PickFailed with the navigation's reason)."""
 
-    def facing_for(self, point_in_map: np.ndarray) -> float:
-        """The heading to grasp from: square to the surface the object is on."""
+    def stance_for(self, point_in_map: np.ndarray) -> Stance:
+        """Where to stand to grasp the object there: square to its surface, with room on the left for the left arm
+        (`grasp_plan.grasp_stance` on the robot's map)."""
+
+    def room_on_left(self) -> float:
+        """How far the map is free to the robot's left, from where it stands (m, up to what the arm needs)."""
 
     def arm(self, moves: Sequence[Move]) -> None:
         """Play arm moves (the arm takes over the joints first) and return when they are done."""
@@ -83,14 +86,14 @@ def pick(name: str, height: float, body: PickBody) -> PickReport:
             break
         if attempt == STANCE_ATTEMPTS:
             raise PickFailed(f"unreachable: the {name} is {problem} after {corrections} stance corrections")
-        body.go_to(grasp_stance((float(seen[0]), float(seen[1])), body.facing_for(seen)))
+        body.go_to(body.stance_for(seen))
         corrections += 1
         seen = body.locate(name)
         if seen is None:
             raise PickFailed(f"not found: lost sight of the {name} at the counter")
     moves, grasp = grasp_moves(in_feet, height)
     try:
-        body.arm([*arm_out_moves(), *moves])
+        body.arm([*arm_out_moves(body.room_on_left()), *moves])
         grip = body.grip_opening()
         if grip < EMPTY_GRIP_M:
             raise PickFailed(f"grasp failed: the gripper closed on nothing ({grip * 2000:.0f} mm open)")
@@ -99,9 +102,9 @@ def pick(name: str, height: float, body: PickBody) -> PickReport:
         rise = float(lifted[2] - seen[2]) if lifted is not None else float("nan")
         grip = body.grip_opening()
         if grip < EMPTY_GRIP_M or (lifted is not None and rise < MIN_RISE_M):
+            risen = f"rose {rise * 100:.1f} of {LIFT_M * 100:.0f} cm" if lifted is not None else "out of sight"
             raise PickFailed(
-                f"grasp slipped: the {name} did not rise with the hand (rose {rise * 100:.1f} of "
-                f"{LIFT_M * 100:.0f} cm, gripper {grip * 2000:.0f} mm open)"
+                f"grasp slipped: the {name} did not rise with the hand ({risen}, gripper {grip * 2000:.0f} mm open)"
             )
     except PickFailed:
         body.arm(release_moves(grasp))

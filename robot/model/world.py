@@ -23,6 +23,8 @@ PARTITION_X = 0.4
 DOORWAY_WIDTH = 0.8
 # Robot footprint radius used to inflate obstacles when checking reachability (m).
 ROBOT_RADIUS = 0.16
+# What navigation keeps clear beyond the footprint: a walking robot sways, and its arms reach past its feet (m).
+NAV_CLEARANCE_M = 0.08
 GRID_RESOLUTION = 0.05
 # Obstacles are at least this tall, so the lidar's plane (about 0.17 m up) crosses them (m).
 OBSTACLE_MIN_HEIGHT = 0.2
@@ -271,7 +273,10 @@ def generate_world(seed: int = 0, obstacle_count: int = 3) -> WorldLayout:
             walls=_walls(),
             robot_start=start,
         )
-        if len(obstacles) == obstacle_count and reachable(layout, [p.staging for p in places]):
+        # solvable by the navigator's own rules: a gap the robot's footprint fits through, but its grown map closes
+        # (an obstacle just in front of the doorway), would fail every run as "path blocked"
+        passable = ROBOT_RADIUS + NAV_CLEARANCE_M
+        if len(obstacles) == obstacle_count and reachable(layout, [p.staging for p in places], passable):
             return layout
     raise RuntimeError(f"could not generate a solvable world for seed {seed}")  # pragma: no cover
 

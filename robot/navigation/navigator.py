@@ -15,12 +15,12 @@ from dataclasses import dataclass
 from typing import Protocol
 
 from robot.interface import NavigationState
-from robot.model.world import ROBOT_RADIUS
+from robot.model.world import NAV_CLEARANCE_M, ROBOT_RADIUS
 from robot.navigation.costmap import Costmap
 from robot.navigation.follower import PathFollower
 from robot.navigation.grid_planner import astar, nearest_free, simplify
 
-CLEARANCE_M = 0.08  # beyond the footprint: a walking robot sways, and its arms reach past its feet
+CLEARANCE_M = NAV_CLEARANCE_M  # beyond the footprint: a walking robot sways, and its arms reach past its feet
 CONTROL_PERIOD_S = 0.1
 REPLAN_CHECK_S = 0.5
 BLOCKED_WAIT_S = 3.0  # a path found blocked is retried for this long before giving up

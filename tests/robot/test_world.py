@@ -4,7 +4,15 @@ import math
 
 import pytest
 
-from robot.model.world import KITCHEN_COUNTER, Box, generate_world, occupancy_grid, reachable
+from robot.model.world import (
+    KITCHEN_COUNTER,
+    NAV_CLEARANCE_M,
+    ROBOT_RADIUS,
+    Box,
+    generate_world,
+    occupancy_grid,
+    reachable,
+)
 
 
 def test_same_seed_same_world_and_different_seeds_differ() -> None:
@@ -21,7 +29,8 @@ def test_every_seed_is_solvable(seed: int) -> None:
     assert {"kitchen counter", "living-room table", "charging dock"} <= set(world.place_names)
     assert {"red mug", "blue bottle", "green apple"} <= set(world.object_names)
     assert len(world.obstacles) >= 3
-    assert reachable(world, [p.staging for p in world.places])
+    # by the navigator's rules: its map grows every obstacle by the footprint and a clearance
+    assert reachable(world, [p.staging for p in world.places], ROBOT_RADIUS + NAV_CLEARANCE_M)
 
 
 @pytest.mark.parametrize("seed", range(10))
