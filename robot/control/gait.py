@@ -238,17 +238,20 @@ class GaitPlannerCore:
         return self._sample(self._trajectory, t, ends_standing=False, plan_ms=(time.perf_counter() - started) * 1e3)
 
     def stop(self, t: float) -> GaitSegment:
-        """Two steps in place, then stand on both feet; the segment runs to the end of the trajectory."""
+        """Two steps in place, then stand on both feet; the segment runs to the end of the trajectory. When placo
+        cannot change the supports at this instant, the walk goes on as planned (`ends_standing` False) and the
+        caller asks again: stopping at the end of the old plan instead walked its 8 steps ahead at the last speed,
+        about 2 s and several cm past where the robot was told to stop."""
         if self._trajectory is None:
             raise RuntimeError("not walking")
         trajectory = self._trajectory
-
+        if not self._walk.can_replan_supports(trajectory, t):
+            return self._sample(trajectory, t, ends_standing=False, plan_ms=0.0)
         started = time.perf_counter()
-        if self._walk.can_replan_supports(trajectory, t):
-            self._footsteps.configure(0.0, 0.0, 0.0, 2)
-            supports = self._walk.replan_supports(self._footsteps, trajectory, t, self._last_replan)
-            self._trajectory = trajectory = self._walk.replan(supports, trajectory, t)
-            self._last_replan = t
+        self._footsteps.configure(0.0, 0.0, 0.0, 2)
+        supports = self._walk.replan_supports(self._footsteps, trajectory, t, self._last_replan)
+        self._trajectory = trajectory = self._walk.replan(supports, trajectory, t)
+        self._last_replan = t
         segment = self._sample(trajectory, t, ends_standing=True, plan_ms=(time.perf_counter() - started) * 1e3,
                                horizon=trajectory.t_end - t)  # fmt: skip
         return segment

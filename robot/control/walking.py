@@ -105,6 +105,8 @@ class WalkingController:
             self._pending_at = None
             if self.phase == WalkPhase.STARTING:
                 self.phase = WalkPhase.WALKING
+            elif self.phase == WalkPhase.STOPPING and not segment.ends_standing:
+                self.phase = WalkPhase.WALKING  # the planner could not stop at that instant: ask again next period
         if self.phase == WalkPhase.WALKING and self._pending_at is None and t - self._last_request >= REPLAN_PERIOD_S:
             if _is_still(self._command):
                 self._request("stop", t + PLAN_LEAD_S)

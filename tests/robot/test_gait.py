@@ -106,6 +106,23 @@ def test_stop_ends_standing_on_both_feet(model_path) -> None:
     assert segment.t_end - 0.6 < 4 * SINGLE_SUPPORT_S + 1.0
 
 
+def test_a_stop_is_short_whenever_it_is_asked_for_or_refused_until_the_next_chance(model_path) -> None:
+    """Stopping used to fall back, at instants where placo cannot change the supports, on walking out the old plan
+    (8 steps ahead at the last speed): about 2.5 s and 15+ cm past the stop."""
+    outcomes = []
+    for t in np.arange(0.40, 1.60, 0.05):
+        core = GaitPlannerCore(model_path, DT)
+        core.start(StepCommand(dx=0.04), 0.0)
+        core.replan(StepCommand(dx=0.04), float(t) - 0.1)
+        segment = core.stop(float(t))
+        outcomes.append(segment.ends_standing)
+        if segment.ends_standing:
+            assert segment.t_end - t < 3 * SINGLE_SUPPORT_S + 0.6  # the step under way, two in place, settle
+    assert any(outcomes)
+    refused_in_a_row = max(len(run) for run in "".join("x" if ok else "r" for ok in outcomes).split("x"))
+    assert refused_in_a_row * 0.05 < SINGLE_SUPPORT_S  # a stop asked for every period gets through within a step
+
+
 def test_planner_in_a_child_process_answers_like_the_inline_one(model_path) -> None:
     child = ProcessGaitPlanner(model_path, DT)
     try:
