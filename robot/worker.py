@@ -116,6 +116,7 @@ class _Job:
     status: PlanStatus
     plan: Plan
     cancel: threading.Event
+    fault: str | None = None  # set with `cancel` when a fault (a fall) stopped the plan
 
 
 class RobotWorker:
@@ -847,6 +848,7 @@ class RobotWorker:
                 say=lambda text: self._bus.publish("speech/say", text, text=text),
                 wait_sim=lambda seconds, cancel=job.cancel: self._wait_sim(seconds, cancel),
                 held_object=lambda: self._held_object,
+                fault=lambda j=job: j.fault,
             )
             result = self._executor.run(job.plan, context, lambda i, st, d, j=job: self._on_step(j, i, st, d))
             with self._lock:
@@ -1000,6 +1002,7 @@ class RobotWorker:
             self._teleop_active = False
             self._teleop_velocity, self._teleop_deadline = Velocity(), None
             if self._current_job:
+                self._current_job.fault = f"fell (tilt {measured.tilt_deg:.0f} deg)"
                 self._current_job.cancel.set()
         self._bus.publish("robot/fell", f"the robot fell (tilt {measured.tilt_deg:.0f} deg)", Level.ERROR,
                           tilt_deg=measured.tilt_deg, height_m=float(measured.base_position[2]))  # fmt: skip

@@ -36,6 +36,9 @@ class ExecutionContext:
     # The plan's steps after the running one: a step may prepare for them (navigation stops where the next pick
     # can reach its object).
     upcoming: tuple[Step, ...] = ()
+    # Why the plan was stopped, when a fault stopped it (a fall) rather than the operator: the running step then
+    # fails with this reason instead of counting as cancelled, so the operator and a replanner see what happened.
+    fault: Callable[[], str | None] = field(default=lambda: None)
 
     def check_cancelled(self) -> None:
         if self.cancel.is_set():
@@ -91,6 +94,11 @@ class PlanExecutor:
                     raise CapabilityUnavailable(f"no capability for action {step.action!r}")
                 detail = capability(step.args, replace(ctx, upcoming=tuple(plan.steps[index + 1 :])))
             except Cancelled:
+                fault = ctx.fault()
+                if fault is not None:
+                    on_step(index, StepState.FAILED, fault)
+                    self._skip_rest(plan, index + 1, on_step, StepState.SKIPPED, f"not run: step {index + 1} failed")
+                    return PlanState.FAILED
                 on_step(index, StepState.CANCELLED, "cancelled while running")
                 self._skip_rest(plan, index + 1, on_step, StepState.CANCELLED, "plan cancelled")
                 return PlanState.CANCELLED

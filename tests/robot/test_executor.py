@@ -84,3 +84,28 @@ def test_each_step_sees_the_steps_after_it_so_it_can_prepare_for_them() -> None:
     result, _, _ = run(plan, capabilities)
     assert result == PlanState.SUCCEEDED
     assert seen == [("pick_object", "say"), ("say",), ()]
+
+
+def test_a_fault_that_stops_the_plan_fails_the_running_step_with_its_reason() -> None:
+    """A fall cancels the plan; the step that was running fails with "fell", not "cancelled" (the operator did not
+    cancel anything), and the rest is skipped. Without a fault, the same cancel stays a cancel."""
+
+    def stopped_while_walking(args, ctx: ExecutionContext) -> str:
+        ctx.cancel.set()
+        ctx.check_cancelled()
+        return "never"
+
+    plan = Plan((Step("navigate_to", {"target": "kitchen counter"}), Step("say", {"text": "done"})))
+    for fault, plan_state, step_state, detail, rest in (
+        (None, PlanState.CANCELLED, StepState.CANCELLED, "cancelled while running", StepState.CANCELLED),
+        ("fell (tilt 62 deg)", PlanState.FAILED, StepState.FAILED, "fell (tilt 62 deg)", StepState.SKIPPED),
+    ):
+        updates: list[tuple[int, StepState, str]] = []
+        context = make_context([])
+        context.fault = lambda fault=fault: fault
+        result = PlanExecutor({"navigate_to": stopped_while_walking}).run(
+            plan, context, lambda i, s, d, log=updates: log.append((i, s, d))
+        )
+        assert result == plan_state
+        assert [(s, d) for i, s, d in updates if i == 0][-1] == (step_state, detail)
+        assert final_states(updates)[1] == rest
