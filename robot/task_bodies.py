@@ -15,7 +15,7 @@ from robot.control.head import DEFAULT_TILT
 from robot.control.locomotion import Velocity, clip_velocity
 from robot.interface import DetectedObject
 from robot.manipulation.arm_motion import JointMove, Move
-from robot.manipulation.grasp_plan import CARRY_HAND_AHEAD_M, Stance, carry_moves, grasp_stance, room_on_left
+from robot.manipulation.grasp_plan import CARRY_HAND_AHEAD_M, Stance, carry_moves, grasp_stance
 from robot.manipulation.pick import PickFailed
 from robot.model import humanoid_v1
 from robot.model.world import WorldLayout
@@ -199,14 +199,6 @@ class ArmBody:
             position, _ = self._worker._map_trunk()
             facing = math.atan2(y - position[1], x - position[0])
         return grasp_stance((x, y), facing, self._worker._map_blocked())
-
-    def room_on_left(self) -> float:
-        worker = self._worker
-        blocked = worker._map_blocked()
-        if blocked is None:
-            return math.inf  # no map: nothing known in the way (the sideways arm reaches the whole window)
-        x, y, yaw = NavBodyOfWorker(worker, self._ctx).pose()
-        return room_on_left(x, y, yaw, blocked)
 
     def arm(self, moves: list[Move]) -> None:
         worker = self._worker

@@ -20,10 +20,11 @@ from robot.model import humanoid_v1
 
 # The object in the feet frame when standing to grasp it with the right hand (m).
 GRASP_OFFSET = (0.31, -0.11)
-# With something close on the robot's left, it stands 5 cm further right. World seed 5 has the mug 0.35 m from a
-# wall: from GRASP_OFFSET the left hand touched the wall and every full run failed (the mug knocked over, or the
-# grasp slipped); from here, with the left arm forward, the teleported scratch trial had no contact and lifted it.
+# With something close on the robot's left (a wall at the counter's end), it stands 5 cm further right: world seed 5
+# has the mug 0.35 m from a wall, which leaves the usual stance 0.24 m from it, inside the navigator's margin.
 CROWDED_LEFT_OFFSET = (0.31, -0.06)
+# Room (m, from the feet centre) wanted on the robot's left at the stance; with less, it stands further right.
+STANCE_LEFT_ROOM_M = 0.36
 # What the arm reaches from a stance (feet frame, m): beyond this the stance is corrected first.
 # (scratch trials: grasps at 0.27/0.35 ahead and -0.19/-0.03 to the side all lifted the mug 6 cm)
 REACH_X = (0.27, 0.35)
@@ -51,9 +52,9 @@ def grasp_stance(object_xy: tuple[float, float], facing_yaw: float,
                  blocked: Callable[[float, float], bool] | None = None) -> Stance:  # fmt: skip
     """The pose to stand at, facing `facing_yaw`, to have the object at GRASP_OFFSET from the feet. Given the map
     (`blocked`: is this point taken?), a stance with something close on its left (a wall at the counter's end) moves
-    right instead, with the object at CROWDED_LEFT_OFFSET: the robot's left arm needs room beside it."""
+    right instead, with the object at CROWDED_LEFT_OFFSET."""
     stance = _stance_with_object_at(object_xy, facing_yaw, GRASP_OFFSET)
-    if blocked is not None and room_on_left(stance.x, stance.y, stance.yaw, blocked) < LEFT_ARM_SIDEWAYS_ROOM_M:
+    if blocked is not None and room_on_left(stance.x, stance.y, stance.yaw, blocked) < STANCE_LEFT_ROOM_M:
         stance = _stance_with_object_at(object_xy, facing_yaw, CROWDED_LEFT_OFFSET)
     return stance
 
@@ -81,19 +82,17 @@ def grasp_height(object_height: float) -> float:
     return min(0.6 * object_height, object_height - 0.015)
 
 
-RAISE_SIDEWAYS = {"r_sho_roll": 0.0, "r_sho_pitch": 0.0, "r_el": 0.0, "r_wrist": 0.0,
-                  "l_sho_pitch": -0.3, "l_sho_roll": 1.3, "l_el": 0.8}  # fmt: skip
-# The left hand out of the floor's way in the crouch, without going out sideways: forward and down, 0.18 m ahead
-# of the trunk, 0.18 m to its left (out sideways it is 0.32 m out, and beside a wall it pushed the robot over).
-# Scratch trials: the grasp at the usual offset lifted the mug 6 cm with either; at the far corner of the reach
-# window (0.35 m ahead) only the sideways arm worked, so this one is kept for a crowded left side.
-LEFT_ARM_FORWARD = {"l_sho_pitch": -0.6, "l_sho_roll": 1.3, "l_el": 0.0}
-# Room (m, from the feet centre) the left arm needs out sideways; with less, it goes forward instead.
-LEFT_ARM_SIDEWAYS_ROOM_M = 0.36
+RIGHT_ARM_OUT = {"r_sho_roll": 0.0, "r_sho_pitch": 0.0, "r_el": 0.0, "r_wrist": 0.0}
+# The left arm swung back, straight: its hand clear of the floor in the crouch, within the body's width (nothing
+# beside the robot is touched) and its weight behind the trunk, against the reaching right arm. Teleported scratch
+# grasps on a 5 x 5 grid of the reach window (0.27-0.35 m ahead, -0.19 to -0.03 m to the side) lifted the mug at
+# every point, also beside the wall on world seeds 4, 5 and 10; with the left arm out sideways, the hand pushed the
+# wall and the robot over; with it forward, the grasps 0.33 m ahead failed (the robot tipped, the mug slipped).
+LEFT_ARM_BACK = {"l_sho_pitch": 0.8, "l_sho_roll": 1.3, "l_el": 0.0}
 
 
 def room_on_left(
-    x: float, y: float, yaw: float, blocked: Callable[[float, float], bool], out_to_m: float = LEFT_ARM_SIDEWAYS_ROOM_M
+    x: float, y: float, yaw: float, blocked: Callable[[float, float], bool], out_to_m: float = STANCE_LEFT_ROOM_M
 ) -> float:
     """How far to the left of a robot standing at (x, y) facing `yaw` the map is free, up to `out_to_m` (m, checked
     every 2 cm from 0.1 m out)."""
@@ -103,16 +102,12 @@ def room_on_left(
     return out_to_m
 
 
-def arm_out_moves(room_on_left_m: float = math.inf) -> list[Move]:
+def arm_out_moves() -> list[Move]:
     """From arms down to the right hand in front at shoulder height, clear of what stands on the surface: raise the
     arm sideways (opening the gripper out there), turn it flat, fold the elbow, swing it forward (a straight hand
-    path would sweep through the counter). The left arm lifts its hand clear of the floor for the crouch: out
-    sideways when there is room on the left, else forward."""
-    raise_arms = dict(RAISE_SIDEWAYS)
-    if room_on_left_m < LEFT_ARM_SIDEWAYS_ROOM_M:
-        raise_arms.update(LEFT_ARM_FORWARD)
+    path would sweep through the counter). The left arm swings back for the crouch (LEFT_ARM_BACK)."""
     return [
-        JointMove({**raise_arms, "r_grip": humanoid_v1.FINGER_TRAVEL}, 1.0, "raise sideways"),
+        JointMove({**RIGHT_ARM_OUT, **LEFT_ARM_BACK, "r_grip": humanoid_v1.FINGER_TRAVEL}, 1.0, "raise sideways"),
         JointMove({"r_sho_pitch": 1.57}, 0.8, "turn flat"),
         JointMove({"r_el": 1.8, "r_wrist": -0.9}, 0.8, "fold"),
         JointMove({"r_sho_roll": -0.8}, 1.0, "swing forward"),
@@ -149,7 +144,7 @@ def carry_moves() -> list[Move]:
     """From holding the object up where it was grasped to carrying it close to the body (less to sway when
     walking, nothing sticking out to sweep into furniture when turning); the left arm goes back down."""
     stand = humanoid_v1.stand_posture()
-    left_arm_down = {n: stand[n] for n in RAISE_SIDEWAYS if n.startswith("l_")}
+    left_arm_down = {n: stand[n] for n in LEFT_ARM_BACK}
     return [JointMove({**CARRY_ARM, **left_arm_down}, 1.2, "carry")]
 
 
@@ -165,9 +160,8 @@ def place_moves(spot_in_feet: np.ndarray, object_height: float) -> tuple[list[Mo
     )
     height = trunk_height_for(float(release[2]))
     above = release + np.array([0.0, 0.0, PLACE_ABOVE_M])
-    left_arm_up = {n: v for n, v in RAISE_SIDEWAYS.items() if n.startswith("l_")}
     moves: list[Move] = [
-        JointMove(left_arm_up, 0.8, "left hand up"),  # clear of the floor in the crouch
+        JointMove(LEFT_ARM_BACK, 0.8, "left arm back"),  # clear of the floor in the crouch
         HandMove(tuple(above), 2.0, 0.0, height, label="over the spot"),
         HandMove(tuple(release), 1.5, 0.0, height, label="set down"),
         *release_moves(release),

@@ -49,9 +49,6 @@ class PickBody(Protocol):
         """Where to stand to grasp the object there: square to its surface, with room on the left for the left arm
         (`grasp_plan.grasp_stance` on the robot's map)."""
 
-    def room_on_left(self) -> float:
-        """How far the map is free to the robot's left, from where it stands (m, up to what the arm needs)."""
-
     def arm(self, moves: Sequence[Move]) -> None:
         """Play arm moves (the arm takes over the joints first) and return when they are done."""
 
@@ -93,7 +90,7 @@ def pick(name: str, height: float, body: PickBody) -> PickReport:
             raise PickFailed(f"not found: lost sight of the {name} at the counter")
     moves, grasp = grasp_moves(in_feet, height)
     try:
-        body.arm([*arm_out_moves(body.room_on_left()), *moves])
+        body.arm([*arm_out_moves(), *moves])
         grip = body.grip_opening()
         if grip < EMPTY_GRIP_M:
             raise PickFailed(f"grasp failed: the gripper closed on nothing ({grip * 2000:.0f} mm open)")
