@@ -9,6 +9,7 @@ Joint signs follow each joint's axis in the packaged OP3 (left and right limbs a
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -250,8 +251,10 @@ FRAME_MASS = 1e-6
 FRAME_INERTIA = 1e-9
 
 
+@functools.cache
 def placo_mjcf() -> str:
-    """The kinematic/inertial model for placo, derived from `build_robot_spec()`.
+    """The kinematic/inertial model for placo, derived from `build_robot_spec()` (cached: deriving it takes ~5 s,
+    and the reach IK asked for it again at the first grasp, which stood the robot still at the counter that long).
 
     Geometry, actuators, sensors and constraints are dropped (placo needs none of them), the floating base's free
     joint is removed (placo adds its own), and the frames the walking controller expects are added as bodies.
