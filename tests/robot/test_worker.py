@@ -35,11 +35,13 @@ def plan_done(command_id: int):
 
 def test_worker_runs_in_real_time_and_stands(make_worker) -> None:
     worker = make_worker(realtime=True)
-    assert worker.wait_for(lambda s: s.sim_time_s >= 1.2, 5.0)
+    # statistics refresh once a second: past 2.2 s they cover the second second, not the start-up (where a busy
+    # machine once left the first window at 75 ticks, RTF 0.76)
+    assert worker.wait_for(lambda s: s.sim_time_s >= 2.2, 8.0)
     state = worker.state()
     assert state.mode == Mode.IDLE and not state.fallen
     assert 0.8 < state.control.rtf < 1.2
-    assert state.control.ticks >= 90  # statistics refresh once a second
+    assert state.control.ticks >= 90
 
 
 def test_state_carries_the_imu_and_the_foot_force_pads(make_worker) -> None:
