@@ -46,7 +46,7 @@ class PickBody(Protocol):
         """Walk to the stance (raises PickFailed with the navigation's reason)."""
 
     def stance_for(self, point_in_map: np.ndarray) -> Stance:
-        """Where to stand to grasp the object there: square to its surface, with room on the left for the left arm
+        """Where to stand to grasp the object there: square to its surface, further right beside a wall on the left
         (`grasp_plan.grasp_stance` on the robot's map)."""
 
     def arm(self, moves: Sequence[Move]) -> None:
