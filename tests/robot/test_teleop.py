@@ -55,7 +55,10 @@ def test_teleop_walks_forward_and_the_deadman_stops_it(make_worker) -> None:
     deadman = wait_event(events, "teleop/deadman", timeout=2.0)
     assert 0.3 <= deadman.wall_time_s - last_input < 0.35
     ended = wait_event(events, "teleop/ended", timeout=5.0)
-    assert ended.wall_time_s - deadman.wall_time_s < 3.0  # decelerate, two steps in place, stand: no walking on
+    # decelerate, two steps in place, stand: no walking on. Alone 2.1-2.35 s of simulated time (6 runs); once, under
+    # the suite's load, 3.2 s (the gait planner's process answers the stop a few periods late); walking out the old
+    # 8-step plan took about 5 s.
+    assert ended.sim_time_s - deadman.sim_time_s < 3.5
     assert worker.wait_for(lambda s: s.mode == Mode.IDLE, 1.0)
     state = worker.state()
     assert state.mode == Mode.IDLE and state.locomotion.phase == "standing" and not state.fallen
