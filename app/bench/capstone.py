@@ -105,7 +105,23 @@ def run_task(task: str, seed: int, timeout_s: float = 600.0) -> dict[str, Any]:
         "mug_tilt_deg": round(mug_tilt, 1),
         "replans": int(replans),
         "blocked_at": None if blocker is None else blocker.dropped_at,
+        "steps": _step_times(state.plan),
     }
+
+
+def _step_times(plan: Any) -> list[dict[str, Any]]:
+    """Each step's action, target and simulated duration: where a task's time went."""
+    if plan is None:
+        return []
+    return [
+        {
+            "action": s.action,
+            "args": dict(s.args),
+            "state": str(s.state),
+            "sim_s": None if s.sim_start_s is None or s.sim_end_s is None else round(s.sim_end_s - s.sim_start_s, 2),
+        }
+        for s in plan.steps
+    ]
 
 
 class _PathBlocker:
