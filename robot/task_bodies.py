@@ -15,7 +15,13 @@ from robot.control.head import DEFAULT_TILT
 from robot.control.locomotion import Velocity, clip_velocity
 from robot.interface import DetectedObject
 from robot.manipulation.arm_motion import JointMove, Move
-from robot.manipulation.grasp_plan import CARRY_HAND_AHEAD_M, Stance, carry_moves, grasp_stance
+from robot.manipulation.grasp_plan import (
+    CARRY_HAND_AHEAD_M,
+    Stance,
+    carry_moves,
+    comfortably_in_reach,
+    grasp_stance,
+)
 from robot.manipulation.pick import PickFailed
 from robot.model import humanoid_v1
 from robot.model.world import WorldLayout
@@ -174,17 +180,18 @@ class ArmBody:
         trunk = worker._arm_motion().trunk_in_feet(worker._measured.joint_positions)
         return trunk[:3, :3] @ in_trunk + trunk[:3, 3]
 
-    def go_to(self, stance: Stance) -> None:
+    def go_to(self, stance: Stance, reach: np.ndarray | None = None) -> None:
         worker = self._worker
+        good_stop = None if reach is None else (lambda: comfortably_in_reach(self.to_feet(reach)))
         worker._head.point(0.0, DEFAULT_TILT)
         back = (stance.x - STAGING_BACK_M * math.cos(stance.yaw), stance.y - STAGING_BACK_M * math.sin(stance.yaw))
         navigator = Navigator(NavBodyOfWorker(worker, self._ctx), lambda: worker._sim_time, worker._set_navigation)
         x, y, _ = NavBodyOfWorker(worker, self._ctx).pose()
         try:
             if math.dist((x, y), (stance.x, stance.y)) < STEP_TO_M:  # the reach window is +-4 cm: settle tightly
-                navigator.step_to((stance.x, stance.y, stance.yaw), settle_m=STANCE_SETTLE_M)
+                navigator.step_to((stance.x, stance.y, stance.yaw), STANCE_SETTLE_M, good_stop)
             else:
-                navigator.go(back, (stance.x, stance.y, stance.yaw))
+                navigator.go(back, (stance.x, stance.y, stance.yaw), good_stop)
         except NavigationFailed as exc:
             raise PickFailed(str(exc)) from exc
         finally:

@@ -69,7 +69,7 @@ from robot.interface import (
     Teleop,
 )
 from robot.manipulation.arm_motion import ArmMotion
-from robot.manipulation.grasp_plan import grasp_stance
+from robot.manipulation.grasp_plan import comfortably_in_reach, grasp_stance
 from robot.manipulation.pick import PickFailed, pick
 from robot.manipulation.place import PlaceFailed, choose_spot
 from robot.manipulation.place import place as place_held
@@ -414,7 +414,17 @@ class RobotWorker:
                 report = navigator.go((pose.x, pose.y), final)
             else:
                 assert place is not None
-                report = navigator.go(place.staging, lambda: self._work_pose(place, ctx.upcoming))
+                work: list[np.ndarray] = []  # what the work pose must have in reach, once known
+
+                def work_pose() -> tuple[float, float, float]:
+                    pose, target = self._work_pose(place, ctx.upcoming)
+                    work.extend([] if target is None else [target])
+                    return pose
+
+                def in_reach() -> bool:
+                    return bool(work) and comfortably_in_reach(ArmBody(self, ctx).to_feet(work[0]))
+
+                report = navigator.go(place.staging, work_pose, in_reach)
         except NavigationFailed as exc:
             raise StepFailed(str(exc)) from exc
         finally:
@@ -431,10 +441,12 @@ class RobotWorker:
             f"{report.final_error_m * 100:.1f} cm and {report.final_heading_error_deg:.0f} deg from the goal"
         )
 
-    def _work_pose(self, place: Place, upcoming: tuple[Step, ...]) -> tuple[float, float, float]:
-        """Where to stop at a place: if the plan next picks an object seen there, or puts one down there, the
-        stance with that object or spot in reach (saves a correction walk at the surface); otherwise the place's
-        own approach pose."""
+    def _work_pose(
+        self, place: Place, upcoming: tuple[Step, ...]
+    ) -> tuple[tuple[float, float, float], np.ndarray | None]:
+        """Where to stop at a place, and what must be in reach there: if the plan next picks an object seen there, or
+        puts one down there, the stance with that object or spot in reach (saves a correction walk at the surface);
+        otherwise the place's own approach pose, and nothing."""
         assert self._perception is not None
         for step in upcoming:
             if step.action == "navigate_to":
@@ -443,7 +455,7 @@ class RobotWorker:
                 spot = self._place_spot(place, self._held_object or "")
                 if spot is not None and self._world_context().resolve_place(step.args["location"]) == place.name:
                     stance = grasp_stance((float(spot[0]), float(spot[1])), place.approach[2])
-                    return (stance.x, stance.y, stance.yaw)
+                    return (stance.x, stance.y, stance.yaw), spot
                 continue
             if step.action != "pick_object" or place.surface is None:
                 continue
@@ -451,8 +463,8 @@ class RobotWorker:
             remembered = self._perception.memory.get(name)
             if remembered is not None and place.surface.contains(*remembered.position[:2]):
                 stance = grasp_stance(remembered.position[:2], place.approach[2], self._map_blocked())
-                return (stance.x, stance.y, stance.yaw)
-        return place.approach
+                return (stance.x, stance.y, stance.yaw), np.asarray(remembered.position, dtype=float)
+        return place.approach, None
 
     def _map_blocked(self) -> Callable[[float, float], bool] | None:
         """Whether a map point is taken on the lidar map (obstacles not grown); None before the first map."""

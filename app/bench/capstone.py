@@ -110,7 +110,7 @@ def run_task(task: str, seed: int, timeout_s: float = 600.0) -> dict[str, Any]:
 
 
 def _step_times(plan: Any) -> list[dict[str, Any]]:
-    """Each step's action, target and simulated duration: where a task's time went."""
+    """Each step's action, arguments, outcome and simulated duration: where a task's time went."""
     if plan is None:
         return []
     return [
@@ -118,6 +118,7 @@ def _step_times(plan: Any) -> list[dict[str, Any]]:
             "action": s.action,
             "args": dict(s.args),
             "state": str(s.state),
+            "detail": s.detail,
             "sim_s": None if s.sim_start_s is None or s.sim_end_s is None else round(s.sim_end_s - s.sim_start_s, 2),
         }
         for s in plan.steps

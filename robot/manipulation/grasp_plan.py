@@ -77,6 +77,21 @@ def reach_problem(object_in_feet: np.ndarray) -> str | None:
     return None
 
 
+# Where a walk to a work pose may come to rest: with the object at least this far inside the reach window (m), so
+# that the fresh sighting at the surface, a cm or so off the remembered position, still finds it in reach.
+REACH_MARGIN_M = 0.015
+
+
+def comfortably_in_reach(object_in_feet: np.ndarray, margin: float = REACH_MARGIN_M) -> bool:
+    """Whether the object (feet frame) is in the right hand's reach with `margin` to spare on every side."""
+    x, y, z = (float(v) for v in object_in_feet)
+    return (
+        REACH_X[0] + margin <= x <= REACH_X[1] - margin
+        and REACH_Y[0] + margin <= y <= REACH_Y[1] - margin
+        and REACH_SURFACE_Z[0] <= z <= REACH_SURFACE_Z[1]
+    )
+
+
 def grasp_height(object_height: float) -> float:
     """Where on the object the fingers close, above its base (m): a little above the middle, under the rim."""
     return min(0.6 * object_height, object_height - 0.015)

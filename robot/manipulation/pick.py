@@ -42,8 +42,9 @@ class PickBody(Protocol):
 
     def to_feet(self, point_in_map: np.ndarray) -> np.ndarray: ...
 
-    def go_to(self, stance: Stance) -> None:
-        """Walk to the stance (raises PickFailed with the navigation's reason)."""
+    def go_to(self, stance: Stance, reach: np.ndarray | None = None) -> None:
+        """Walk to the stance (raises PickFailed with the navigation's reason); a stop short of it with the map point
+        `reach` comfortably in the arm's reach will do."""
 
     def stance_for(self, point_in_map: np.ndarray) -> Stance:
         """Where to stand to grasp the object there: square to its surface, further right beside a wall on the left
@@ -83,7 +84,7 @@ def pick(name: str, height: float, body: PickBody) -> PickReport:
             break
         if attempt == STANCE_ATTEMPTS:
             raise PickFailed(f"unreachable: the {name} is {problem} after {corrections} stance corrections")
-        body.go_to(body.stance_for(seen))
+        body.go_to(body.stance_for(seen), seen)
         corrections += 1
         seen = body.locate(name)
         if seen is None:

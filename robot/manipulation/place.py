@@ -36,8 +36,9 @@ class PlaceBody(Protocol):
 
     def to_feet(self, point_in_map: np.ndarray) -> np.ndarray: ...
 
-    def go_to(self, stance: Stance) -> None:
-        """Walk to the stance (raises PickFailed or PlaceFailed with the navigation's reason)."""
+    def go_to(self, stance: Stance, reach: np.ndarray | None = None) -> None:
+        """Walk to the stance (raises PickFailed or PlaceFailed with the navigation's reason); a stop short of it
+        with the map point `reach` comfortably in the arm's reach will do."""
 
     def arm(self, moves: list[Move]) -> None: ...
 
@@ -64,7 +65,7 @@ def place(name: str, height: float, spot: np.ndarray, facing_yaw: float, body: P
             break
         if attempt == STANCE_ATTEMPTS:
             raise PlaceFailed(f"unreachable: the spot is {problem} after {corrections} stance corrections")
-        body.go_to(grasp_stance((float(spot[0]), float(spot[1])), facing_yaw))
+        body.go_to(grasp_stance((float(spot[0]), float(spot[1])), facing_yaw), spot)
         corrections += 1
     moves, _ = place_moves(in_feet, height)
     body.arm(moves)

@@ -111,9 +111,11 @@ class Navigator:
 
     def go(self, staging: tuple[float, float],
            approach: tuple[float, float, float] | Callable[[], tuple[float, float, float]] | None = None,
-           ) -> NavigationReport:  # fmt: skip
+           good_stop: Callable[[], bool] | None = None) -> NavigationReport:  # fmt: skip
         """Walk a planned path to `staging`, then straight onto the `approach` pose if one is given (a callable is
-        asked at the staging point: what the robot sees from there may decide where it stands)."""
+        asked at the staging point: what the robot sees from there may decide where it stands). `good_stop` is the
+        caller's own judgement of where the robot came to rest (a work pose: the object in the arm's reach): a stop
+        it accepts ends the approach, however far from the exact pose."""
         report = NavigationReport()
         started = self._now()
         self._goal = approach if isinstance(approach, tuple) else (*staging, self.body.pose()[2])
@@ -124,7 +126,7 @@ class Navigator:
             self._goal = approach
         if approach is not None:
             self._on_update(NavigationState(self._goal, report.path, report.replans, "approaching"))
-            self._approach(approach, report)
+            self._approach(approach, report, good_stop=good_stop)
         self._on_update(NavigationState(self._goal, report.path, report.replans, "arrived"))
         x, y, yaw = self.body.pose()
         goal = approach if approach is not None else (*staging, yaw)
@@ -133,14 +135,15 @@ class Navigator:
         report.sim_s = self._now() - started
         return report
 
-    def step_to(self, goal: tuple[float, float, float], settle_m: float = SETTLED_M) -> NavigationReport:
+    def step_to(self, goal: tuple[float, float, float], settle_m: float = SETTLED_M,
+                good_stop: Callable[[], bool] | None = None) -> NavigationReport:  # fmt: skip
         """A short straight walk onto a pose, without planning (adjusting the stance at a counter: from right in
         front of furniture the map puts the robot inside the furniture's grown footprint, where A* cannot start)."""
         report = NavigationReport()
         started = self._now()
         self._goal = goal
         self._on_update(NavigationState(goal, (), 0, "approaching"))
-        self._approach(goal, report, settle_m)
+        self._approach(goal, report, settle_m, good_stop)
         self._on_update(NavigationState(goal, (), 0, "arrived"))
         x, y, yaw = self.body.pose()
         report.final_error_m = math.dist((x, y), goal[:2])
@@ -214,11 +217,11 @@ class Navigator:
                 self.body.wait(0.5)
 
     def _approach(self, goal: tuple[float, float, float], report: NavigationReport,
-                  settle_m: float = SETTLED_M) -> None:  # fmt: skip
+                  settle_m: float = SETTLED_M, good_stop: Callable[[], bool] | None = None) -> None:  # fmt: skip
         """Walk the last stretch slowly and stop on the goal pose. Stopping takes two steps in place, which move the
-        robot a few cm (more when it carries something): once stopped within `settle_m` and SETTLED_RAD it has
-        arrived; further off, it walks again, and each retry accepts SETTLE_GROWTH_M more (stopping drifts about
-        the same each time, so insisting would never end)."""
+        robot a few cm (more when it carries something): once stopped within `settle_m` and SETTLED_RAD, or where
+        `good_stop` accepts, it has arrived; further off, it walks again, and each retry accepts SETTLE_GROWTH_M more
+        (stopping drifts about the same each time, so insisting would never end). A retry costs 3-4 s."""
         body = self.body
         kx, ky, kw = APPROACH_GAIN
         lx, ly, lw = APPROACH_LIMIT
@@ -232,6 +235,8 @@ class Navigator:
                 self._stop(promptly=True)
                 ex, ey, heading_error = _pose_error(body.pose(), goal)
                 if math.hypot(ex, ey) < tolerance and abs(heading_error) < SETTLED_RAD:
+                    return
+                if good_stop is not None and abs(heading_error) < SETTLED_RAD and good_stop():
                     return
                 tolerance = min(tolerance + SETTLE_GROWTH_M, MAX_SETTLE_M)
             body.drive(_clip(kx * ex, lx), _clip(ky * ey, ly), _clip(kw * heading_error, lw))

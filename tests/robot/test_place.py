@@ -53,7 +53,7 @@ class FakeBody:
     def to_feet(self, point_in_map: np.ndarray) -> np.ndarray:
         return np.asarray(point_in_map, dtype=float) - self.feet
 
-    def go_to(self, stance: Stance) -> None:
+    def go_to(self, stance: Stance, reach: np.ndarray | None = None) -> None:
         self.stances.append(stance)
         self.feet = np.array([stance.x, stance.y, 0.0])
 
