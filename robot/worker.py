@@ -10,6 +10,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 import queue
 import shutil
@@ -414,7 +415,7 @@ class RobotWorker:
                 report = navigator.go((pose.x, pose.y), final)
             else:
                 assert place is not None
-                work: list[np.ndarray] = []  # what the work pose must have in reach, once known
+                work: list[Callable[[], np.ndarray | None]] = []  # where the work pose's object is, once known
 
                 def work_pose() -> tuple[float, float, float]:
                     pose, target = self._work_pose(place, ctx.upcoming)
@@ -422,7 +423,8 @@ class RobotWorker:
                     return pose
 
                 def in_reach() -> bool:
-                    return bool(work) and comfortably_in_reach(ArmBody(self, ctx).to_feet(work[0]))
+                    point = work[0]() if work else None
+                    return point is not None and comfortably_in_reach(ArmBody(self, ctx).to_feet(point))
 
                 report = navigator.go(place.staging, work_pose, in_reach)
         except NavigationFailed as exc:
@@ -441,11 +443,11 @@ class RobotWorker:
             f"{report.final_error_m * 100:.1f} cm and {report.final_heading_error_deg:.0f} deg from the goal"
         )
 
-    def _work_pose(
-        self, place: Place, upcoming: tuple[Step, ...]
-    ) -> tuple[tuple[float, float, float], np.ndarray | None]:
-        """Where to stop at a place, and what must be in reach there: if the plan next picks an object seen there, or
-        puts one down there, the stance with that object or spot in reach (saves a correction walk at the surface);
+    def _work_pose(self, place: Place, upcoming: tuple[Step, ...],
+                   ) -> tuple[tuple[float, float, float], Callable[[], np.ndarray | None] | None]:  # fmt: skip
+        """Where to stop at a place, and where the thing to have in reach there is (asked again at the stop: the
+        camera keeps refining an object's position on the way): if the plan next picks an object seen there, or puts
+        one down there, the stance with that object or spot in reach (saves a correction walk at the surface);
         otherwise the place's own approach pose, and nothing."""
         assert self._perception is not None
         for step in upcoming:
@@ -455,7 +457,7 @@ class RobotWorker:
                 spot = self._place_spot(place, self._held_object or "")
                 if spot is not None and self._world_context().resolve_place(step.args["location"]) == place.name:
                     stance = grasp_stance((float(spot[0]), float(spot[1])), place.approach[2])
-                    return (stance.x, stance.y, stance.yaw), spot
+                    return (stance.x, stance.y, stance.yaw), functools.partial(np.copy, spot)
                 continue
             if step.action != "pick_object" or place.surface is None:
                 continue
@@ -463,8 +465,13 @@ class RobotWorker:
             remembered = self._perception.memory.get(name)
             if remembered is not None and place.surface.contains(*remembered.position[:2]):
                 stance = grasp_stance(remembered.position[:2], place.approach[2], self._map_blocked())
-                return (stance.x, stance.y, stance.yaw), np.asarray(remembered.position, dtype=float)
+                return (stance.x, stance.y, stance.yaw), functools.partial(self._remembered_position, name)
         return place.approach, None
+
+    def _remembered_position(self, name: str) -> np.ndarray | None:
+        assert self._perception is not None
+        known = self._perception.memory.get(name)
+        return None if known is None else np.asarray(known.position, dtype=float)
 
     def _map_blocked(self) -> Callable[[float, float], bool] | None:
         """Whether a map point is taken on the lidar map (obstacles not grown); None before the first map."""
