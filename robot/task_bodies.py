@@ -185,7 +185,9 @@ class ArmBody:
         good_stop = None if reach is None else (lambda: comfortably_in_reach(self.to_feet(reach)))
         worker._head.point(0.0, DEFAULT_TILT)
         back = (stance.x - STAGING_BACK_M * math.cos(stance.yaw), stance.y - STAGING_BACK_M * math.sin(stance.yaw))
-        navigator = Navigator(NavBodyOfWorker(worker, self._ctx), lambda: worker._sim_time, worker._set_navigation)
+        navigator = Navigator(
+            NavBodyOfWorker(worker, self._ctx), lambda: worker._sim_time, worker._set_navigation, worker._stop_drift
+        )
         x, y, _ = NavBodyOfWorker(worker, self._ctx).pose()
         try:
             if math.dist((x, y), (stance.x, stance.y)) < STEP_TO_M:  # the reach window is +-4 cm: settle tightly
@@ -235,7 +237,9 @@ class ArmBody:
         if back < MIN_STEP_BACK_M:
             return
         goal = (x - back * math.cos(yaw), y - back * math.sin(yaw), yaw)
-        navigator = Navigator(NavBodyOfWorker(worker, self._ctx), lambda: worker._sim_time, worker._set_navigation)
+        navigator = Navigator(
+            NavBodyOfWorker(worker, self._ctx), lambda: worker._sim_time, worker._set_navigation, worker._stop_drift
+        )
         try:
             navigator.step_to(goal, settle_m=STEP_BACK_SETTLE_M)
         except NavigationFailed as exc:

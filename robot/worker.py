@@ -80,7 +80,7 @@ from robot.model.scene import scene_xml
 from robot.model.world import ROBOT_RADIUS, Place, WorldLayout
 from robot.navigation.costmap import Costmap
 from robot.navigation.goal import parse_pose_goal
-from robot.navigation.navigator import NavigationFailed, Navigator
+from robot.navigation.navigator import NavigationFailed, Navigator, StopDrift
 from robot.perception.geometry import matrix_to_quat_wxyz, yaw_of
 from robot.perception.search import ObjectNotFound, find_object
 from robot.perception.sensor_process import SensorError
@@ -162,6 +162,7 @@ class RobotWorker:
         self._estop_pending: tuple[EStop, float] | None = None
         self._fallen = False
         self._held_object: str | None = None
+        self._stop_drift = StopDrift()  # what stopping a walk does to the pose, learnt by every final approach
         self._current_job: _Job | None = None
         self._finished_job: _Job | None = None  # the last plan that ran, shown until the next one starts
         self._last_command: tuple[int, str] | None = None  # (command_id, text) of the command being served
@@ -406,7 +407,9 @@ class RobotWorker:
             raise StepFailed(f"unknown place {args['target']!r}")
         self._head.point(0.0, DEFAULT_TILT)  # look ahead and down while walking
         try:
-            navigator = Navigator(NavBodyOfWorker(self, ctx), lambda: self._sim_time, self._set_navigation)
+            navigator = Navigator(
+                NavBodyOfWorker(self, ctx), lambda: self._sim_time, self._set_navigation, self._stop_drift
+            )
             if pose is not None:  # a pose on the map: walk there, then turn to its heading if it has one
                 costmap = NavBodyOfWorker(self, ctx).costmap(ROBOT_RADIUS)
                 if costmap is not None and costmap.blocked_at(pose.x, pose.y):

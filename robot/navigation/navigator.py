@@ -36,6 +36,7 @@ SETTLED_RAD = math.radians(5.0)
 SETTLE_GROWTH_M = 0.015
 MAX_SETTLE_M = 0.08
 APPROACH_TIMEOUT_S = 30.0
+MIN_WALK_S = 1.0
 
 
 class NavigationFailed(Exception):
@@ -101,10 +102,35 @@ def _path_blocked(costmap: Costmap, follower: PathFollower) -> bool:
     return False
 
 
+@dataclass
+class StopDrift:
+    """How far the robot still moves while it stops (its own frame, m): the two steps in place that end a walk carry
+    it on a few cm, mostly the same way each time (measured: 2-3 cm to the left, 0-2 cm back). Learnt from every
+    stop of the final approach, so the next one stops that much early and comes to rest on the goal."""
+
+    ahead: float = 0.0
+    left: float = 0.0
+
+    def learn(self, ahead: float, left: float) -> None:
+        """Blend in one stop's measured drift (a stop that had to take extra steps counts no more than MAX_DRIFT_M)."""
+        size = math.hypot(ahead, left)
+        if size > MAX_DRIFT_M:
+            ahead, left = ahead * MAX_DRIFT_M / size, left * MAX_DRIFT_M / size
+        self.ahead += DRIFT_LEARNING_RATE * (ahead - self.ahead)
+        self.left += DRIFT_LEARNING_RATE * (left - self.left)
+
+
+MAX_DRIFT_M = 0.05
+DRIFT_LEARNING_RATE = 0.5
+
+
 class Navigator:
     def __init__(self, body: NavBody, sim_time: Callable[[], float],
-                 on_update: Callable[[NavigationState], None] | None = None) -> None:  # fmt: skip
+                 on_update: Callable[[NavigationState], None] | None = None,
+                 stop_drift: StopDrift | None = None) -> None:  # fmt: skip
+        """`stop_drift` is shared by the navigations of one robot (what one stop taught serves the next)."""
         self.body = body
+        self.stop_drift = stop_drift if stop_drift is not None else StopDrift()
         self._now = sim_time
         self._on_update = on_update or (lambda state: None)
         self._goal: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -228,18 +254,27 @@ class Navigator:
         deadline = self._now() + APPROACH_TIMEOUT_S
         report.walked_m += math.dist(body.pose()[:2], goal[:2])
         tolerance = settle_m
+        drift = self.stop_drift
+        walked_since = -math.inf  # a retry walks at least MIN_WALK_S: a stop from standing would teach nothing
         while self._now() < deadline:
             self._check_fall()
             ex, ey, heading_error = _pose_error(body.pose(), goal)
-            if math.hypot(ex, ey) < ARRIVED_M and abs(heading_error) < ARRIVED_RAD:
+            # aim short of the goal by what the stop will still carry the robot
+            ax, ay = ex - drift.ahead, ey - drift.left
+            aimed = math.hypot(ax, ay) < ARRIVED_M and abs(heading_error) < ARRIVED_RAD
+            if aimed and self._now() - walked_since >= MIN_WALK_S:
                 self._stop(promptly=True)
-                ex, ey, heading_error = _pose_error(body.pose(), goal)
-                if math.hypot(ex, ey) < tolerance and abs(heading_error) < SETTLED_RAD:
+                sx, sy, heading_error = _pose_error(body.pose(), goal)
+                drift.learn(ex - sx, ey - sy)
+                if math.hypot(sx, sy) < tolerance and abs(heading_error) < SETTLED_RAD:
                     return
                 if good_stop is not None and abs(heading_error) < SETTLED_RAD and good_stop():
                     return
                 tolerance = min(tolerance + SETTLE_GROWTH_M, MAX_SETTLE_M)
-            body.drive(_clip(kx * ex, lx), _clip(ky * ey, ly), _clip(kw * heading_error, lw))
+                walked_since = self._now()
+                ex, ey = sx, sy
+                ax, ay = ex - drift.ahead, ey - drift.left
+            body.drive(_clip(kx * ax, lx), _clip(ky * ay, ly), _clip(kw * heading_error, lw))
             body.wait(CONTROL_PERIOD_S)
         self._stop()
         error = math.dist(body.pose()[:2], goal[:2])
