@@ -1001,10 +1001,17 @@ class RobotWorker:
         self._loco.set_velocity(velocity)
         if promptly:
             self._loco.stop(promptly=True)
+        was_walking = self._loco.moving
         targets = self._loco.update(sensors(measured), self._posture.goal)
         if not self._loco.moving:
             with self._lock:  # a posture command may have just arrived: holding the stance must not undo it
-                if self._posture_name == Posture.STAND:
+                if self._posture_name == Posture.STAND and was_walking:
+                    # The walk ends in its own posture, which is not the standing one when the arms carry something
+                    # (knees 0.34 rad deeper): moving there in one tick made the robot hop and pitch 8-10 deg just
+                    # as placing began (a fall on world seed 13). Go there at posture speed instead.
+                    self._posture.hold(targets)
+                    self._posture.move_to(self._stand)
+                elif self._posture_name == Posture.STAND:
                     self._posture.hold(self._stand)
                 ended = self._teleop_active and self._teleop_deadline is None
                 if ended:
