@@ -211,6 +211,10 @@ class ArmBody:
 
     def arm(self, moves: list[Move]) -> None:
         worker = self._worker
+        if not worker._arm_active:
+            # a walk that has just ended may still be moving to the standing posture: reaching from the posture half
+            # way (knees deep as when carrying) made the first hand move snap the legs straight and tip the robot
+            self._wait_standing()
         arm = worker._take_arm()
         arm.queue(*moves)
         try:
