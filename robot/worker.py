@@ -120,6 +120,10 @@ class _Job:
     fault: str | None = None  # set with `cancel` when a fault (a fall) stopped the plan
 
 
+# How fast the legs go from the walk's last posture to the standing one (rad/s): 0.34 rad in ~0.85 s when carrying.
+WALK_TO_STAND_SPEED_RAD_S = 0.4
+
+
 class RobotWorker:
     """Runs the robot. Use `start()`, then talk to it only through the `RobotPort` methods."""
 
@@ -1008,9 +1012,9 @@ class RobotWorker:
                 if self._posture_name == Posture.STAND and was_walking:
                     # The walk ends in its own posture, which is not the standing one when the arms carry something
                     # (knees 0.34 rad deeper): moving there in one tick made the robot hop and pitch 8-10 deg just
-                    # as placing began (a fall on world seed 13). Go there at posture speed instead.
+                    # as placing began (a fall on world seed 13), and at posture speed (0.2 s) it still pitched 9.
                     self._posture.hold(targets)
-                    self._posture.move_to(self._stand)
+                    self._posture.move_to(self._stand, WALK_TO_STAND_SPEED_RAD_S)
                 elif self._posture_name == Posture.STAND:
                     self._posture.hold(self._stand)
                 ended = self._teleop_active and self._teleop_deadline is None

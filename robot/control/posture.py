@@ -18,20 +18,25 @@ class PostureController:
         self._targets = np.array(initial_targets, dtype=float)
         self._goal = self._targets.copy()
         self._max_speed = max_speed_rad_s
+        self._speed = max_speed_rad_s
 
-    def move_to(self, goal: np.ndarray) -> None:
-        """Start a capped-speed move from the current targets to `goal`."""
+    def move_to(self, goal: np.ndarray, max_speed_rad_s: float | None = None) -> None:
+        """Start a capped-speed move from the current targets to `goal` (at `max_speed_rad_s` if given, for this
+        move only)."""
         self._goal = np.array(goal, dtype=float)
+        self._speed = self._max_speed if max_speed_rad_s is None else max_speed_rad_s
 
     def freeze(self) -> np.ndarray:
         """Controlled stop: no further motion from now on; returns the targets to hold."""
         self._goal = self._targets.copy()
+        self._speed = self._max_speed
         return self._targets.copy()
 
     def hold(self, targets: np.ndarray) -> None:
         """Take over from another controller: hold `targets` (what it last commanded) from now on."""
         self._targets = np.array(targets, dtype=float)
         self._goal = self._targets.copy()
+        self._speed = self._max_speed
 
     @property
     def goal(self) -> np.ndarray:
@@ -39,7 +44,7 @@ class PostureController:
 
     def update(self, dt: float) -> np.ndarray:
         """Targets for this tick."""
-        step = np.clip(self._goal - self._targets, -self._max_speed * dt, self._max_speed * dt)
+        step = np.clip(self._goal - self._targets, -self._speed * dt, self._speed * dt)
         self._targets = self._targets + step
         return self._targets.copy()
 
