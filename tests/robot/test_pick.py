@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from robot.interface import ExecutePlan, PlanState
-from robot.manipulation.grasp_plan import GRASP_OFFSET, grasp_stance, reach_problem
+from robot.manipulation.grasp_plan import GRASP_OFFSET, comfortably_in_reach, grasp_stance, reach_problem
 from robot.model.scene import object_body_name
 from robot.model.world import generate_world
 from robot.sim.backend import MujocoSimBackend
@@ -23,6 +23,14 @@ def test_the_grasp_stance_puts_the_object_ahead_and_to_the_right_of_the_feet(yaw
     ahead, left = c * dx + s * dy, -s * dx + c * dy
     assert (ahead, left) == pytest.approx(GRASP_OFFSET, abs=1e-9)
     assert stance.yaw == yaw
+
+
+def test_a_stop_is_good_for_a_grasp_only_with_the_object_well_inside_the_reach() -> None:
+    assert comfortably_in_reach(np.array([0.31, -0.11, 0.25]))
+    assert reach_problem(np.array([0.34, -0.11, 0.25])) is None  # in reach, but a fresh sighting 1 cm off is not
+    assert not comfortably_in_reach(np.array([0.34, -0.11, 0.25]))
+    assert not comfortably_in_reach(np.array([0.31, -0.035, 0.25]))
+    assert not comfortably_in_reach(np.array([0.31, -0.11, 0.60]))
 
 
 def test_reach_says_what_is_out_of_reach() -> None:
