@@ -26,7 +26,7 @@ from robot.manipulation.pick import PickFailed
 from robot.model import humanoid_v1
 from robot.model.world import WorldLayout
 from robot.navigation.costmap import Costmap
-from robot.navigation.navigator import NavigationFailed, Navigator
+from robot.navigation.navigator import NavigationFailed
 from robot.perception.geometry import yaw_of
 from robot.planning.executor import ExecutionContext, StepFailed
 
@@ -180,14 +180,16 @@ class ArmBody:
         trunk = worker._arm_motion().trunk_in_feet(worker._measured.joint_positions)
         return trunk[:3, :3] @ in_trunk + trunk[:3, 3]
 
+    def comfortably_reaches(self, point_in_map: np.ndarray) -> bool:
+        """Whether the right hand reaches the map point from where the robot stands, with a margin to spare."""
+        return comfortably_in_reach(self.to_feet(point_in_map))
+
     def go_to(self, stance: Stance, reach: np.ndarray | None = None) -> None:
         worker = self._worker
-        good_stop = None if reach is None else (lambda: comfortably_in_reach(self.to_feet(reach)))
+        good_stop = None if reach is None else (lambda: self.comfortably_reaches(reach))
         worker._head.point(0.0, DEFAULT_TILT)
         back = (stance.x - STAGING_BACK_M * math.cos(stance.yaw), stance.y - STAGING_BACK_M * math.sin(stance.yaw))
-        navigator = Navigator(
-            NavBodyOfWorker(worker, self._ctx), lambda: worker._sim_time, worker._set_navigation, worker._stop_drift
-        )
+        navigator = worker._navigator(self._ctx)
         x, y, _ = NavBodyOfWorker(worker, self._ctx).pose()
         try:
             if math.dist((x, y), (stance.x, stance.y)) < STEP_TO_M:  # the reach window is +-4 cm: settle tightly
@@ -241,9 +243,7 @@ class ArmBody:
         if back < MIN_STEP_BACK_M:
             return
         goal = (x - back * math.cos(yaw), y - back * math.sin(yaw), yaw)
-        navigator = Navigator(
-            NavBodyOfWorker(worker, self._ctx), lambda: worker._sim_time, worker._set_navigation, worker._stop_drift
-        )
+        navigator = worker._navigator(self._ctx)
         try:
             navigator.step_to(goal, settle_m=STEP_BACK_SETTLE_M)
         except NavigationFailed as exc:

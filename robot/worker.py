@@ -70,7 +70,7 @@ from robot.interface import (
     Teleop,
 )
 from robot.manipulation.arm_motion import ArmMotion
-from robot.manipulation.grasp_plan import comfortably_in_reach, grasp_stance
+from robot.manipulation.grasp_plan import grasp_stance
 from robot.manipulation.pick import PickFailed, pick
 from robot.manipulation.place import PlaceFailed, choose_spot
 from robot.manipulation.place import place as place_held
@@ -411,9 +411,7 @@ class RobotWorker:
             raise StepFailed(f"unknown place {args['target']!r}")
         self._head.point(0.0, DEFAULT_TILT)  # look ahead and down while walking
         try:
-            navigator = Navigator(
-                NavBodyOfWorker(self, ctx), lambda: self._sim_time, self._set_navigation, self._stop_drift
-            )
+            navigator = self._navigator(ctx)
             if pose is not None:  # a pose on the map: walk there, then turn to its heading if it has one
                 costmap = NavBodyOfWorker(self, ctx).costmap(ROBOT_RADIUS)
                 if costmap is not None and costmap.blocked_at(pose.x, pose.y):
@@ -425,13 +423,13 @@ class RobotWorker:
                 work: list[Callable[[], np.ndarray | None]] = []  # where the work pose's object is, once known
 
                 def work_pose() -> tuple[float, float, float]:
-                    pose, target = self._work_pose(place, ctx.upcoming)
+                    stance, target = self._work_pose(place, ctx.upcoming)
                     work.extend([] if target is None else [target])
-                    return pose
+                    return stance
 
                 def in_reach() -> bool:
                     point = work[0]() if work else None
-                    return point is not None and comfortably_in_reach(ArmBody(self, ctx).to_feet(point))
+                    return point is not None and ArmBody(self, ctx).comfortably_reaches(point)
 
                 report = navigator.go(place.staging, work_pose, in_reach)
         except NavigationFailed as exc:
@@ -449,6 +447,10 @@ class RobotWorker:
             f"at {where}: walked {report.walked_m:.2f} m in {report.sim_s:.0f} s{replans}, "
             f"{report.final_error_m * 100:.1f} cm and {report.final_heading_error_deg:.0f} deg from the goal"
         )
+
+    def _navigator(self, ctx: ExecutionContext) -> Navigator:
+        """A navigator on this robot's legs and map, sharing what its stops have taught (`StopDrift`)."""
+        return Navigator(NavBodyOfWorker(self, ctx), lambda: self._sim_time, self._set_navigation, self._stop_drift)
 
     def _work_pose(self, place: Place, upcoming: tuple[Step, ...],
                    ) -> tuple[tuple[float, float, float], Callable[[], np.ndarray | None] | None]:  # fmt: skip
