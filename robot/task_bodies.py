@@ -234,7 +234,7 @@ class ArmBody:
 
     def stand_holding(self) -> None:
         worker = self._worker
-        self.arm([_legs_to(worker._default_stand, STAND_UP_S), *carry_moves()])
+        self.arm(_standing_up_with(carry_moves(), worker._default_stand))
         worker._release_arm(worker._arm_motion().targets)
         self._wait_standing()
         # a hand still over the surface would sweep along it when the robot turns away: step back first
@@ -254,7 +254,7 @@ class ArmBody:
 
     def stow_arm(self) -> None:
         worker = self._worker
-        self.arm([_legs_to(worker._default_stand, STAND_UP_S), *_arm_back_moves()])
+        self.arm(_standing_up_with(_arm_back_moves(), worker._default_stand))
         worker._release_arm(None)
         self._wait_standing()
 
@@ -285,6 +285,18 @@ def _legs_to(targets: np.ndarray, duration_s: float) -> JointMove:
     return JointMove({n: float(targets[names.index(n)]) for n in humanoid_v1.LEG_JOINTS}, duration_s, "stand up")
 
 
+def _standing_up_with(moves: list[Move], stand: np.ndarray) -> list[Move]:
+    """The legs back to the standing posture while the first (joint) arm move plays: one move, not two in a row
+    (1.2-1.5 s saved each time the robot stands up from a reach)."""
+    first, *rest = moves
+    if not isinstance(first, JointMove):
+        raise TypeError("standing up goes with a joint move: a hand move would have the solver move the legs")
+    legs = _legs_to(stand, STAND_UP_S)
+    both = JointMove({**legs.positions, **first.positions}, max(STAND_UP_S, first.duration_s),
+                     f"stand up, {first.label}")  # fmt: skip
+    return [both, *rest]
+
+
 SWING_BACK = {"r_sho_pitch": 1.57, "r_sho_roll": 0.0, "r_el": 1.8, "r_wrist": -0.9}
 
 
@@ -293,8 +305,7 @@ def _arm_back_moves() -> list[Move]:
     stand = humanoid_v1.stand_posture()
     return [
         JointMove({**SWING_BACK, "r_grip": 0.0}, 1.2, "swing back"),
-        JointMove({"r_el": 0.0, "r_wrist": 0.0}, 0.8, "unfold"),
-        JointMove({"r_sho_pitch": 0.0}, 0.8, "turn upright"),
+        JointMove({"r_el": 0.0, "r_wrist": 0.0, "r_sho_pitch": 0.0}, 1.0, "unfold upright"),
         JointMove({n: stand[n] for n in ("r_sho_roll", "l_sho_pitch", "l_sho_roll", "l_el")}, 1.0, "arms down"),
     ]
 
