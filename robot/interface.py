@@ -364,7 +364,7 @@ class NavigationState:
     goal: tuple[float, float, float]  # x, y, heading
     path: tuple[tuple[float, float], ...]
     replans: int = 0
-    phase: str = "following"  # following | approaching | arrived
+    phase: str = "following"  # backing away | following | approaching | arrived
 
 
 @dataclass(frozen=True)

@@ -237,20 +237,6 @@ class ArmBody:
         self.arm(_standing_up_with(carry_moves(), worker._default_stand))
         worker._release_arm(worker._arm_motion().targets)
         self._wait_standing()
-        # a hand still over the surface would sweep along it when the robot turns away: step back first
-        x, y, yaw = NavBodyOfWorker(worker, self._ctx).pose()
-        back = CARRY_HAND_AHEAD_M + CARRY_CLEARANCE_M - _surface_ahead_m(worker.layout, x, y, yaw)
-        if back < MIN_STEP_BACK_M:
-            return
-        goal = (x - back * math.cos(yaw), y - back * math.sin(yaw), yaw)
-        navigator = worker._navigator(self._ctx)
-        try:
-            navigator.step_to(goal, settle_m=STEP_BACK_SETTLE_M)
-        except NavigationFailed as exc:
-            raise PickFailed(f"could not step back from the surface: {exc}") from exc
-        finally:
-            worker._set_task_velocity(Velocity())
-            worker._set_navigation(None)
 
     def stow_arm(self) -> None:
         worker = self._worker
@@ -268,10 +254,16 @@ LOCATE_TIMEOUT_S = 2.0
 STAGING_BACK_M = 0.12
 CARRY_CLEARANCE_M = 0.02  # between the carried object and a surface's edge, before turning away from it
 MIN_STEP_BACK_M = 0.04
-STEP_BACK_SETTLE_M = 0.06  # stepping back needs no precision
 STANCE_SETTLE_M = 0.02
 STEP_TO_M = 0.6  # nearer than this, the stance is corrected by a straight walk
 STAND_UP_S = 1.5
+
+
+def carry_back_away_m(layout: WorldLayout, pose: tuple[float, float, float]) -> float:
+    """How far a robot carrying something at `pose` must walk back before it turns away: the object, held out
+    ahead, would otherwise sweep along the surface in front of it (0 when it is clear already)."""
+    back = CARRY_HAND_AHEAD_M + CARRY_CLEARANCE_M - _surface_ahead_m(layout, *pose)
+    return back if back >= MIN_STEP_BACK_M else 0.0
 
 
 def _surface_ahead_m(layout: WorldLayout, x: float, y: float, yaw: float) -> float:

@@ -63,7 +63,6 @@ from robot.interface import (
     RunCommand,
     SensorFeed,
     SetPosture,
-    Step,
     StepState,
     StepStatus,
     StopTeleop,
@@ -72,7 +71,7 @@ from robot.interface import (
 from robot.manipulation.arm_motion import ArmMotion
 from robot.manipulation.grasp_plan import grasp_stance
 from robot.manipulation.pick import PickFailed, pick
-from robot.manipulation.place import PlaceFailed, choose_spot
+from robot.manipulation.place import PlaceFailed, choose_spot, spots_in_reach
 from robot.manipulation.place import place as place_held
 from robot.manipulation.reach_ik import ReachIK
 from robot.model import humanoid_v1
@@ -99,7 +98,7 @@ from robot.planning.validator import validate_plan, validate_plan_json
 from robot.planning.world_context import WorldContext
 from robot.sim.backend import Measurements, MujocoSimBackend
 from robot.state_board import StateBoard
-from robot.task_bodies import ArmBody, NavBodyOfWorker, TaskBody
+from robot.task_bodies import ArmBody, NavBodyOfWorker, TaskBody, carry_back_away_m
 
 MAX_COMMAND_CHARS = 500
 # When the loop falls this many ticks behind, it stops trying to catch up (sim time would race wall time).
@@ -343,7 +342,10 @@ class RobotWorker:
         if place is None:
             raise StepFailed(f"unknown place {args['location']!r}")
         obj = next(o for o in self.layout.objects if o.name == held)
-        spot = self._place_spot(place, held)
+        # a free spot in reach from where the robot stopped, else the one in front of the place (walking there)
+        spot = self._place_spot_here(place, held, ArmBody(self, ctx))
+        if spot is None:
+            spot = self._place_spot(place, held)
         if spot is None:
             raise StepFailed(f"unreachable: no free spot on the {place.name} in front of the robot")
         try:
@@ -362,12 +364,25 @@ class RobotWorker:
         return f"put the {held} on the {place.name} at ({x:.2f}, {y:.2f}), {report.error_m * 100:.1f} cm from the spot"
 
     def _place_spot(self, place: Place, held: str) -> np.ndarray | None:
-        """Where on the place's surface to put the held object: free of what the robot remembers standing there."""
+        """Where on the place's surface to put the held object, seen from the place's approach: free of what the
+        robot remembers standing there."""
         if place.surface is None:
             return None
+        return choose_spot(place.surface, place.approach, self._occupied_except(held))
+
+    def _place_spot_here(self, place: Place, held: str, arm: ArmBody) -> np.ndarray | None:
+        """A free spot on the place's surface comfortably in the hand's reach from where the robot stands, if any."""
+        if place.surface is None:
+            return None
+        position, rotation = self._map_trunk()
+        pose = (float(position[0]), float(position[1]), yaw_of(rotation))
+        spots = spots_in_reach(place.surface, pose, self._occupied_except(held))
+        return next((spot for spot in spots if arm.comfortably_reaches(spot)), None)
+
+    def _occupied_except(self, held: str) -> list[tuple[float, float]]:
+        """Where the objects the robot remembers stand (map, m), but the one it holds."""
         assert self._perception is not None
-        occupied = [k.position[:2] for k in self._perception.memory.snapshot() if k.name != held]
-        return choose_spot(place.surface, place.approach, occupied)
+        return [k.position[:2] for k in self._perception.memory.snapshot() if k.name != held]
 
     def _arm_motion(self) -> ArmMotion:
         if self._arm is None:
@@ -417,21 +432,21 @@ class RobotWorker:
                 if costmap is not None and costmap.blocked_at(pose.x, pose.y):
                     raise StepFailed(f"unreachable: ({pose.text()}) is in or against an obstacle on the map")
                 final = None if pose.yaw is None else (pose.x, pose.y, pose.yaw)
-                report = navigator.go((pose.x, pose.y), final)
+                report = navigator.go((pose.x, pose.y), final, back_away_m=self._back_away_m(ctx))
             else:
                 assert place is not None
-                work: list[Callable[[], np.ndarray | None]] = []  # where the work pose's object is, once known
+                # whether a stop will do for the work there, by the latest answer (the navigator asks on the way)
+                work: list[Callable[[], bool] | None] = [None]
 
                 def work_pose() -> tuple[float, float, float]:
-                    stance, target = self._work_pose(place, ctx.upcoming)
-                    work.extend([] if target is None else [target])
+                    stance, work[0] = self._work_pose(place, ctx)
                     return stance
 
                 def in_reach() -> bool:
-                    point = work[0]() if work else None
-                    return point is not None and ArmBody(self, ctx).comfortably_reaches(point)
+                    good_stop = work[0]
+                    return good_stop is not None and good_stop()
 
-                report = navigator.go(place.staging, work_pose, in_reach)
+                report = navigator.go(place.staging, work_pose, in_reach, self._back_away_m(ctx))
         except NavigationFailed as exc:
             raise StepFailed(str(exc)) from exc
         finally:
@@ -448,25 +463,35 @@ class RobotWorker:
             f"{report.final_error_m * 100:.1f} cm and {report.final_heading_error_deg:.0f} deg from the goal"
         )
 
+    def _back_away_m(self, ctx: ExecutionContext) -> float:
+        """How far to walk back before setting off: carrying something held out over a surface, the robot would
+        sweep it along the surface as it turns away (the walk backs away first, without stopping)."""
+        if self._held_object is None:
+            return 0.0
+        return carry_back_away_m(self.layout, NavBodyOfWorker(self, ctx).pose())
+
     def _navigator(self, ctx: ExecutionContext) -> Navigator:
         """A navigator on this robot's legs and map, sharing what its stops have taught (`StopDrift`)."""
         return Navigator(NavBodyOfWorker(self, ctx), lambda: self._sim_time, self._set_navigation, self._stop_drift)
 
-    def _work_pose(self, place: Place, upcoming: tuple[Step, ...],
-                   ) -> tuple[tuple[float, float, float], Callable[[], np.ndarray | None] | None]:  # fmt: skip
-        """Where to stop at a place, and where the thing to have in reach there is (asked again at the stop: the
-        camera keeps refining an object's position on the way): if the plan next picks an object seen there, or puts
-        one down there, the stance with that object or spot in reach (saves a correction walk at the surface);
-        otherwise the place's own approach pose, and nothing."""
+    def _work_pose(self, place: Place, ctx: ExecutionContext,
+                   ) -> tuple[tuple[float, float, float], Callable[[], bool] | None]:  # fmt: skip
+        """Where to stop at a place, and whether a stop will do for the work there (asked at each stop: the camera
+        keeps refining an object's position on the way): if the plan next picks an object seen there, the stance with
+        it in reach, and a stop that has it comfortably in reach will do; if it next puts something down there, the
+        stance for a free spot, and a stop with any free spot in reach will do (saves correction walks at the
+        surface); otherwise the place's own approach pose, and nothing."""
         assert self._perception is not None
-        for step in upcoming:
+        arm = ArmBody(self, ctx)
+        for step in ctx.upcoming:
             if step.action == "navigate_to":
                 break
             if step.action == "place_object":
-                spot = self._place_spot(place, self._held_object or "")
+                held = self._held_object or ""
+                spot = self._place_spot(place, held)
                 if spot is not None and self._world_context().resolve_place(step.args["location"]) == place.name:
                     stance = grasp_stance((float(spot[0]), float(spot[1])), place.approach[2])
-                    return (stance.x, stance.y, stance.yaw), functools.partial(np.copy, spot)
+                    return (stance.x, stance.y, stance.yaw), functools.partial(self._has_spot_here, place, held, arm)
                 continue
             if step.action != "pick_object" or place.surface is None:
                 continue
@@ -474,8 +499,15 @@ class RobotWorker:
             remembered = self._perception.memory.get(name)
             if remembered is not None and place.surface.contains(*remembered.position[:2]):
                 stance = grasp_stance(remembered.position[:2], place.approach[2], self._map_blocked())
-                return (stance.x, stance.y, stance.yaw), functools.partial(self._remembered_position, name)
+                return (stance.x, stance.y, stance.yaw), functools.partial(self._remembered_in_reach, name, arm)
         return place.approach, None
+
+    def _has_spot_here(self, place: Place, held: str, arm: ArmBody) -> bool:
+        return self._place_spot_here(place, held, arm) is not None
+
+    def _remembered_in_reach(self, name: str, arm: ArmBody) -> bool:
+        point = self._remembered_position(name)
+        return point is not None and arm.comfortably_reaches(point)
 
     def _remembered_position(self, name: str) -> np.ndarray | None:
         assert self._perception is not None

@@ -23,6 +23,10 @@ HEADING_GAIN = 1.0
 TURN_IN_PLACE_RAD = 0.6
 ARRIVED_M = 0.08
 SLOW_DOWN_M = 0.3
+# The fraction of full speed a path ends at: slow, for a stop there; for a path that runs on into a final approach,
+# the approach's speed (0.08 of 0.15 m/s), since slowing further only to speed up again costs about half a second.
+STOP_END_SPEED = 0.3
+RUN_ON_END_SPEED = 0.55
 # How far along the path the robot's progress may jump in one update (m): a path that doubles back on itself
 # must not be skipped.
 PROGRESS_WINDOW_M = 0.5
@@ -38,7 +42,8 @@ class FollowCommand:
 
 
 class PathFollower:
-    def __init__(self, waypoints: list[tuple[float, float]]) -> None:
+    def __init__(self, waypoints: list[tuple[float, float]], end_speed: float = STOP_END_SPEED) -> None:
+        """`end_speed`: the fraction of full speed to arrive at (STOP_END_SPEED for a stop at the end)."""
         if not waypoints:
             raise ValueError("a path needs at least one waypoint")
         points = [waypoints[0]] + [b for a, b in itertools.pairwise(waypoints) if math.dist(a, b) > 1e-9]
@@ -48,6 +53,7 @@ class PathFollower:
         self._arc = np.concatenate([[0.0], np.cumsum(lengths)])
         self.length = float(self._arc[-1])
         self.progress = 0.0  # arc length of the robot's nearest point on the path
+        self.end_speed = end_speed
 
     def point_at(self, s: float) -> tuple[float, float]:
         """The path's point `s` metres from its start (clamped to its ends)."""
@@ -90,5 +96,5 @@ class PathFollower:
         yaw_rate = max(-MAX_TURN_RAD_S, min(MAX_TURN_RAD_S, HEADING_GAIN * error))
         if abs(error) > TURN_IN_PLACE_RAD:
             return FollowCommand(0.0, 0.0, yaw_rate, False, remaining)
-        speed = MAX_FORWARD_M_S * min(1.0, remaining / SLOW_DOWN_M + 0.3) * math.cos(error) ** 2
+        speed = MAX_FORWARD_M_S * min(1.0, remaining / SLOW_DOWN_M + self.end_speed) * math.cos(error) ** 2
         return FollowCommand(speed, 0.0, yaw_rate, False, remaining)

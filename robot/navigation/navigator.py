@@ -5,19 +5,27 @@ Two goals per place: the *staging* point on open floor in front of it (reached a
 robot's footprint plus a margin clear of everything) and the *approach* pose at the surface (reached from the
 staging point by a short straight walk, where the margin no longer applies). Every failure says why: no path
 ("path blocked"), no progress ("stuck"), a fall.
+
+The path arrives lined up with the approach: it ends on the staging line (through the staging point, across the
+approach heading) right behind the approach pose, after a straight lead-in along that heading. Arriving sideways
+cost 6-8 s per approach, turning up to 90 deg and side-stepping 11 cm at the surface (turning in place runs at
+about 0.4 rad/s, side steps at 0.05 m/s); the lead-in makes that turn on the way, while walking.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol
 
+import numpy as np
+
 from robot.interface import NavigationState
 from robot.model.world import NAV_CLEARANCE_M, ROBOT_RADIUS
 from robot.navigation.costmap import Costmap
-from robot.navigation.follower import PathFollower
+from robot.navigation.follower import RUN_ON_END_SPEED, STOP_END_SPEED, FollowCommand, PathFollower
 from robot.navigation.grid_planner import astar, nearest_free, simplify
 
 CLEARANCE_M = NAV_CLEARANCE_M  # beyond the footprint: a walking robot sways, and its arms reach past its feet
@@ -33,10 +41,32 @@ ARRIVED_RAD = math.radians(3.0)
 # Where the robot may come to rest: the two steps in place that stop the walk move it up to a few cm.
 SETTLED_M = 0.035
 SETTLED_RAD = math.radians(5.0)
+# A stop the caller judges good for its work (the object in the arm's reach, judged from the feet) may be turned
+# this far: the stop's last two steps turn the robot by up to 7 deg, and retrying for 5 deg cost 3-4 s a time
+# (one approach in two at the counter). The arm's moves are planned in the feet's frame.
+WORK_SETTLED_RAD = math.radians(10.0)
 SETTLE_GROWTH_M = 0.015
 MAX_SETTLE_M = 0.08
 APPROACH_TIMEOUT_S = 30.0
 MIN_WALK_S = 1.0
+# The path's last straight stretch, along the approach heading (m): about the follower's turning radius (0.15 m/s
+# at 0.6 rad/s: 0.25 m); the follower steers onto the stretch's line, so it arrives lined up. A shorter one is
+# tried where this one does not fit.
+LEAD_IN_M = 0.3
+# A lead-in that lengthens the path by more than this (m) costs more walking (0.13 m/s) than the turn at the
+# surface it saves (a 90 deg turn with the side steps of the approach: 4-5 s).
+LEAD_IN_MAX_DETOUR_M = 0.35
+# A turn in place that has not turned TURN_STALL_RAD in TURN_STALL_S is pressed against something: the robot steps
+# STEP_CLEAR_M away from the nearest mapped obstacle (looked for within STEP_CLEAR_SEARCH_M) and replans.
+TURN_STALL_S = 4.0
+TURN_STALL_RAD = math.radians(10.0)
+STEP_CLEAR_M = 0.1
+STEP_CLEAR_M_S = 0.04
+STEP_CLEAR_SEARCH_M = 0.4
+# Backing away from a surface before turning (a carried object held out over it would sweep along it).
+BACK_AWAY_M_S = 0.1
+BACK_AWAY_HEADING_GAIN = 1.0
+BACK_AWAY_TOLERANCE_M = 0.01
 
 
 class NavigationFailed(Exception):
@@ -75,8 +105,29 @@ class NavigationReport:
     path: tuple[tuple[float, float], ...] = ()
 
 
-def plan_path(costmap: Costmap, start: tuple[float, float], goal: tuple[float, float]) -> list[tuple[float, float]]:
-    """A path of points from start to goal on the costmap (ends moved to the nearest free cells), or raise."""
+def plan_path(costmap: Costmap, start: tuple[float, float], goal: tuple[float, float],
+              facing: float | None = None) -> list[tuple[float, float]]:  # fmt: skip
+    """A path of points from start to goal on the costmap (ends moved to the nearest free cells), or raise. With
+    `facing`, the path ends with a straight lead-in along that heading where one fits (a lead-in from the other
+    side of the goal, or one that makes a long detour, is not worth it)."""
+    direct = _shortest_path(costmap, start, goal)
+    if facing is None:
+        return direct
+    for lead_in in (LEAD_IN_M, LEAD_IN_M / 2):
+        entry = (goal[0] - lead_in * math.cos(facing), goal[1] - lead_in * math.sin(facing))
+        if _path_length([start, goal]) < 1.5 * lead_in or not _line_free(costmap, entry, goal):
+            continue
+        try:
+            path = [*_shortest_path(costmap, start, entry), goal]
+        except NavigationFailed:
+            continue
+        if _path_length(path) <= _path_length(direct) + LEAD_IN_MAX_DETOUR_M:
+            return path
+    return direct
+
+
+def _shortest_path(costmap: Costmap, start: tuple[float, float],
+                   goal: tuple[float, float]) -> list[tuple[float, float]]:  # fmt: skip
     ends = nearest_free(costmap.blocked, costmap.cell(*start)), nearest_free(costmap.blocked, costmap.cell(*goal))
     if None in ends:
         raise NavigationFailed(f"path blocked: no free space near ({goal[0]:.2f}, {goal[1]:.2f})")
@@ -85,6 +136,69 @@ def plan_path(costmap: Costmap, start: tuple[float, float], goal: tuple[float, f
         raise NavigationFailed(f"path blocked: no path to ({goal[0]:.2f}, {goal[1]:.2f}) on the map")
     points = [start] + [costmap.centre(i, j) for i, j in cells[1:-1]] + [goal]
     return simplify(points, costmap.blocked_at, costmap.resolution / 2)
+
+
+@dataclass
+class _TurnWatch:
+    """Notices a turn in place that does not turn: the robot pressed against something (measured: 20 s of a -0.6
+    rad/s command with the heading wobbling between 0.85 and 1.10 rad, an arm against the end of a wall), which no
+    map shows, so nothing replans."""
+
+    since: float | None = None
+    start_yaw: float = 0.0
+
+    def stalled(self, command: FollowCommand, yaw: float, now: float) -> bool:
+        if command.vx != 0.0 or command.yaw_rate == 0.0:
+            self.since = None
+            return False
+        if self.since is None:
+            self.since, self.start_yaw = now, yaw
+            return False
+        if abs(math.remainder(yaw - self.start_yaw, math.tau)) > TURN_STALL_RAD:
+            self.since, self.start_yaw = now, yaw
+            return False
+        return now - self.since > TURN_STALL_S
+
+
+def _away_from_nearest(costmap: Costmap, x: float, y: float, within_m: float) -> tuple[float, float] | None:
+    """A point leading away from the obstacle cell nearest (x, y) within `within_m`, or None if none is that near."""
+    i, j = costmap.cell(x, y)
+    r = math.ceil(within_m / costmap.resolution)
+    lo_i, lo_j = max(0, i - r), max(0, j - r)
+    window = costmap.blocked[lo_i : i + r + 1, lo_j : j + r + 1]
+    cells = np.argwhere(window)
+    if len(cells) == 0:
+        return None
+    points = np.array([costmap.centre(lo_i + a, lo_j + b) for a, b in cells])
+    distances = np.hypot(points[:, 0] - x, points[:, 1] - y)
+    k = int(np.argmin(distances))
+    if distances[k] > within_m:
+        return None
+    nx, ny = points[k]
+    return (2 * x - float(nx), 2 * y - float(ny))
+
+
+def _path_length(points: list[tuple[float, float]]) -> float:
+    return sum(math.dist(a, b) for a, b in itertools.pairwise(points))
+
+
+def _line_free(costmap: Costmap, a: tuple[float, float], b: tuple[float, float]) -> bool:
+    steps = max(1, math.ceil(math.dist(a, b) / (costmap.resolution / 2)))
+    return not any(costmap.blocked_at(a[0] + (b[0] - a[0]) * k / steps, a[1] + (b[1] - a[1]) * k / steps)
+                   for k in range(steps + 1))  # fmt: skip
+
+
+def arrival_point(staging: tuple[float, float], pose: tuple[float, float, float] | None,
+                  blocked_at: Callable[[float, float], bool]) -> tuple[float, float]:  # fmt: skip
+    """Where a path to `staging` should end to leave only a straight walk ahead onto the approach `pose`: the point
+    of the staging line (through `staging`, across the pose's heading) right behind the pose, when that point is
+    free; else `staging` itself."""
+    if pose is None:
+        return staging
+    across = (-math.sin(pose[2]), math.cos(pose[2]))
+    offset = (pose[0] - staging[0]) * across[0] + (pose[1] - staging[1]) * across[1]
+    point = (staging[0] + offset * across[0], staging[1] + offset * across[1])
+    return staging if blocked_at(*point) else point
 
 
 def _path_blocked(costmap: Costmap, follower: PathFollower) -> bool:
@@ -137,20 +251,26 @@ class Navigator:
 
     def go(self, staging: tuple[float, float],
            approach: tuple[float, float, float] | Callable[[], tuple[float, float, float]] | None = None,
-           good_stop: Callable[[], bool] | None = None) -> NavigationReport:  # fmt: skip
+           good_stop: Callable[[], bool] | None = None, back_away_m: float = 0.0) -> NavigationReport:  # fmt: skip
         """Walk a planned path to `staging`, then straight onto the `approach` pose if one is given (a callable is
         asked at the staging point: what the robot sees from there may decide where it stands). `good_stop` is the
         caller's own judgement of where the robot came to rest (a work pose: the object in the arm's reach): a stop
-        it accepts ends the approach, however far from the exact pose."""
+        it accepts ends the approach, however far from the exact pose. `back_away_m`: first walk straight back this
+        far (away from a surface the robot faces, before it turns), on into the path without stopping."""
         report = NavigationReport()
         started = self._now()
-        self._goal = approach if isinstance(approach, tuple) else (*staging, self.body.pose()[2])
+        ask = approach if callable(approach) else lambda: approach
+        guess = ask()  # where the approach will end, as far as is known now
+        self._goal = guess if guess is not None else (*staging, self.body.pose()[2])
+        if back_away_m > 0.0:
+            self._back_away(back_away_m, report)
+        costmap = self.body.costmap(ROBOT_RADIUS + CLEARANCE_M)
+        end = staging if costmap is None else arrival_point(staging, guess, costmap.blocked_at)
         # walking on into the approach, without stopping at the staging point, saves a stop and a restart
-        self._follow_path(staging, report, stop_at_end=approach is None)
-        if callable(approach):
-            approach = approach()
-            self._goal = approach
+        self._follow_path(end, None if guess is None else guess[2], report, stop_at_end=approach is None)
         if approach is not None:
+            approach = ask()
+            self._goal = approach
             self._on_update(NavigationState(self._goal, report.path, report.replans, "approaching"))
             self._approach(approach, report, good_stop=good_stop)
         self._on_update(NavigationState(self._goal, report.path, report.replans, "arrived"))
@@ -177,21 +297,47 @@ class Navigator:
         report.sim_s = self._now() - started
         return report
 
+    def _back_away(self, distance_m: float, report: NavigationReport) -> None:
+        """Walk straight back `distance_m`, keeping the heading; the walk goes on (no stop: a stop and a restart cost
+        about 3 s, a carrying robot's more)."""
+        body = self.body
+        x0, y0, yaw0 = body.pose()
+        self._on_update(NavigationState(self._goal, (), 0, "backing away"))
+        deadline = self._now() + distance_m / BACK_AWAY_M_S + STUCK_S
+        while True:
+            self._check_fall()
+            x, y, yaw = body.pose()
+            backed = -((x - x0) * math.cos(yaw0) + (y - y0) * math.sin(yaw0))
+            if backed >= distance_m - BACK_AWAY_TOLERANCE_M:
+                report.walked_m += backed
+                return
+            if self._now() > deadline:
+                self._stop()
+                raise NavigationFailed(f"stuck: could not back away {distance_m * 100:.0f} cm from where it stood")
+            heading = BACK_AWAY_HEADING_GAIN * math.remainder(yaw0 - yaw, math.tau)
+            body.drive(-BACK_AWAY_M_S, 0.0, heading)
+            body.wait(CONTROL_PERIOD_S)
+
     def _costmap(self) -> Costmap:
         costmap = self.body.costmap(ROBOT_RADIUS + CLEARANCE_M)
         if costmap is None:
             raise NavigationFailed("no map yet: the lidar has not produced one")
         return costmap
 
-    def _follow_path(self, goal: tuple[float, float], report: NavigationReport, stop_at_end: bool = True) -> None:
+    def _follow_path(self, goal: tuple[float, float], facing: float | None, report: NavigationReport,
+                     stop_at_end: bool = True) -> None:  # fmt: skip
+        """Follow a planned path to `goal` (arriving along `facing` if given), replanning when the map shows the path
+        blocked."""
         body = self.body
         x, y, _ = body.pose()
-        path = self._plan_or_wait((x, y), goal)
+        end_speed = STOP_END_SPEED if stop_at_end else RUN_ON_END_SPEED
+        path = self._plan_or_wait((x, y), goal, facing)
         report.path = tuple(path)
         self._on_update(NavigationState(self._goal, report.path, report.replans))
-        follower = PathFollower(path)
+        follower = PathFollower(path, end_speed)
         last_check = best_time = self._now()
         best_remaining = math.inf
+        turn = _TurnWatch()
         while True:
             self._check_fall()
             x, y, yaw = body.pose()
@@ -200,6 +346,16 @@ class Navigator:
                 report.walked_m += follower.progress
                 break
             now = self._now()
+            if turn.stalled(command, yaw, now):
+                # turning in place against something (an arm on a wall's end): step clear of it, then a new path
+                self._step_clear()
+                report.walked_m += follower.progress
+                path = self._replan(body.pose()[:2], goal, facing)
+                report.path = tuple(path)
+                self._on_update(NavigationState(self._goal, report.path, report.replans))
+                follower = PathFollower(path, end_speed)
+                turn = _TurnWatch()
+                continue
             if command.remaining_m < best_remaining - 0.05:
                 best_remaining, best_time = command.remaining_m, now
             elif now - best_time > STUCK_S:
@@ -210,11 +366,11 @@ class Navigator:
                 last_check = now
                 if _path_blocked(self._costmap(), follower):
                     report.walked_m += follower.progress
-                    path = self._replan((x, y), goal)
+                    path = self._replan((x, y), goal, facing)
                     report.replans += 1
                     report.path = tuple(path)
                     self._on_update(NavigationState(self._goal, report.path, report.replans))
-                    follower = PathFollower(path)
+                    follower = PathFollower(path, end_speed)
                     best_remaining, best_time = math.inf, self._now()
                     continue
             body.drive(command.vx, command.vy, command.yaw_rate)
@@ -222,21 +378,41 @@ class Navigator:
         if stop_at_end:
             self._stop()
 
-    def _replan(self, start: tuple[float, float], goal: tuple[float, float]) -> list[tuple[float, float]]:
+    def _step_clear(self) -> None:
+        """Walk a little away from the nearest obstacle on the map (its grown margin is where the robot stands)."""
+        body = self.body
+        costmap = body.costmap(0.0)
+        x, y, yaw = body.pose()
+        away = _away_from_nearest(costmap, x, y, STEP_CLEAR_SEARCH_M) if costmap is not None else None
+        if away is None:
+            away = (x - math.cos(yaw), y - math.sin(yaw))  # nothing mapped near: straight back
+        dx, dy = away[0] - x, away[1] - y
+        norm = math.hypot(dx, dy) or 1.0
+        c, s = math.cos(yaw), math.sin(yaw)
+        ahead, left = (c * dx + s * dy) / norm, (-s * dx + c * dy) / norm
+        deadline = self._now() + STEP_CLEAR_M / STEP_CLEAR_M_S
+        while self._now() < deadline:
+            self._check_fall()
+            body.drive(STEP_CLEAR_M_S * ahead, STEP_CLEAR_M_S * left, 0.0)
+            body.wait(CONTROL_PERIOD_S)
+
+    def _replan(self, start: tuple[float, float], goal: tuple[float, float],
+                facing: float | None) -> list[tuple[float, float]]:  # fmt: skip
         """A new path, found without breaking stride when the map has one (a stop and a restart cost about 3 s);
         otherwise stop and wait for the way to clear."""
         try:
-            return plan_path(self._costmap(), start, goal)
+            return plan_path(self._costmap(), start, goal, facing)
         except NavigationFailed:
             self._stop()
-            return self._plan_or_wait(start, goal)
+            return self._plan_or_wait(start, goal, facing)
 
-    def _plan_or_wait(self, start: tuple[float, float], goal: tuple[float, float]) -> list[tuple[float, float]]:
+    def _plan_or_wait(self, start: tuple[float, float], goal: tuple[float, float],
+                      facing: float | None) -> list[tuple[float, float]]:  # fmt: skip
         """A path now, or after waiting a little for the way to clear (a person passing), or raise."""
         deadline = self._now() + BLOCKED_WAIT_S
         while True:
             try:
-                return plan_path(self._costmap(), start, goal)
+                return plan_path(self._costmap(), start, goal, facing)
             except NavigationFailed:
                 if self._now() >= deadline:
                     raise
@@ -246,8 +422,9 @@ class Navigator:
                   settle_m: float = SETTLED_M, good_stop: Callable[[], bool] | None = None) -> None:  # fmt: skip
         """Walk the last stretch slowly and stop on the goal pose. Stopping takes two steps in place, which move the
         robot a few cm (more when it carries something): once stopped within `settle_m` and SETTLED_RAD, or where
-        `good_stop` accepts, it has arrived; further off, it walks again, and each retry accepts SETTLE_GROWTH_M more
-        (stopping drifts about the same each time, so insisting would never end). A retry costs 3-4 s."""
+        `good_stop` accepts (turned up to WORK_SETTLED_RAD), it has arrived; further off, it walks again, and each
+        retry accepts SETTLE_GROWTH_M more (stopping drifts about the same each time, so insisting would never end).
+        A retry costs 3-4 s."""
         body = self.body
         kx, ky, kw = APPROACH_GAIN
         lx, ly, lw = APPROACH_LIMIT
@@ -268,7 +445,7 @@ class Navigator:
                 drift.learn(ex - sx, ey - sy)
                 if math.hypot(sx, sy) < tolerance and abs(heading_error) < SETTLED_RAD:
                     return
-                if good_stop is not None and abs(heading_error) < SETTLED_RAD and good_stop():
+                if good_stop is not None and abs(heading_error) < WORK_SETTLED_RAD and good_stop():
                     return
                 tolerance = min(tolerance + SETTLE_GROWTH_M, MAX_SETTLE_M)
                 walked_since = self._now()

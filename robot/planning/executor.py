@@ -55,10 +55,15 @@ def unavailable(reason: str) -> Capability:
     return run
 
 
+# How long saying a word takes: espeak-ng's default rate, 175 words per minute.
+SPEECH_S_PER_WORD = 60.0 / 175.0
+MAX_SPEECH_S = 5.0
+
+
 def say_capability(args: dict[str, str], ctx: ExecutionContext) -> str:
     ctx.say(args["text"])
-    # Give a listener time to hear it: about 150 words per minute.
-    ctx.wait_sim(min(5.0, 0.4 * len(args["text"].split())))
+    # the step lasts as long as the words take to say
+    ctx.wait_sim(min(MAX_SPEECH_S, SPEECH_S_PER_WORD * len(args["text"].split())))
     return f'said "{args["text"]}"'
 
 

@@ -7,14 +7,16 @@ import os
 import subprocess
 import sys
 
+import pytest
+
 RESULT_KEYS = {"success", "transcript", "plan", "steps", "sim_time_s", "wall_time_s", "fell", "held_object",
                "session_id"}  # fmt: skip
 
 
-def humanoid(tmp_path, *args: str) -> subprocess.CompletedProcess:
+def humanoid(tmp_path, *args: str, timeout_s: float = 120.0) -> subprocess.CompletedProcess:
     env = {**os.environ, "DATABASE_URL": f"sqlite:///{tmp_path / 'cli.db'}"}
     return subprocess.run([sys.executable, "-m", "app.cli", *args], capture_output=True, text=True, env=env,
-                          timeout=120)  # fmt: skip
+                          timeout=timeout_s)  # fmt: skip
 
 
 def test_run_prints_the_result_and_records_a_session(tmp_path) -> None:
@@ -38,6 +40,21 @@ def test_run_prints_the_result_and_records_a_session(tmp_path) -> None:
     assert "holding the red mug" in second["steps"][2]["detail"]
     assert second["steps"][3]["action"] == "say"
     assert second["wall_time_s"] < second["sim_time_s"]  # headless runs faster than real time
+
+
+@pytest.mark.slow
+def test_bring_carries_the_mug_to_the_table_and_puts_it_down(tmp_path) -> None:
+    """The whole fetch: walk, find, grasp, back away from the counter carrying it, walk, put it down at a free spot
+    in reach of where the robot stopped, check it stands there, say so."""
+    done = humanoid(tmp_path, "run", "bring the red mug to the living-room table", "--seed", "2", "--json",
+                    timeout_s=400)  # fmt: skip
+    result = json.loads(done.stdout)
+    steps = result["steps"]
+    assert [s["action"] for s in steps] == ["navigate_to", "detect_object", "pick_object", "navigate_to",
+                                            "place_object", "say"]  # fmt: skip
+    assert [s["status"] for s in steps] == ["succeeded"] * 6, steps
+    assert result["success"] is True and result["held_object"] is None and not result["fell"]
+    assert "put the red mug on the living-room table" in steps[4]["detail"]
 
 
 def test_run_with_an_unknown_object_fails_clearly(tmp_path) -> None:

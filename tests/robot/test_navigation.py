@@ -1,4 +1,4 @@
-"""Grid paths and the path follower (the parts of navigation the mapping tour already uses)."""
+"""Grid paths, lead-ins to an approach heading, and the path follower."""
 
 from __future__ import annotations
 
@@ -8,8 +8,10 @@ import math
 import numpy as np
 import pytest
 
+from robot.navigation.costmap import Costmap
 from robot.navigation.follower import MAX_FORWARD_M_S, MAX_TURN_RAD_S, PathFollower
 from robot.navigation.grid_planner import astar, inflate, simplify
+from robot.navigation.navigator import LEAD_IN_M, LEAD_IN_MAX_DETOUR_M, arrival_point, plan_path
 
 
 def test_astar_goes_around_a_wall_through_its_gap_without_cutting_corners() -> None:
@@ -49,32 +51,84 @@ def test_simplify_keeps_only_the_corners_of_a_free_path() -> None:
     assert simplify(path, lambda x, y: x > 0.05 and y < 0.95, 0.02) == [(0.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
 
 
-def test_follower_brings_a_unicycle_to_the_goal_within_its_limits() -> None:
-    follower = PathFollower([(0.0, 0.0), (1.0, 0.0), (1.0, 1.0)])
-    x, y, yaw, dt = 0.0, 0.0, math.pi, 0.1  # starts facing away: it must turn in place first
+def _drive(follower: PathFollower, x: float, y: float, yaw: float) -> tuple[bool, list[tuple[float, float, float]]]:
+    """A unicycle that does exactly what the follower says, 0.1 s a step: whether it arrived, and its track."""
+    track, dt = [(x, y, yaw)], 0.1
     for _ in range(2000):
         command = follower.update(x, y, yaw)
         if command.arrived:
-            break
+            return True, track
         assert 0.0 <= command.vx <= MAX_FORWARD_M_S + 1e-9 and abs(command.yaw_rate) <= MAX_TURN_RAD_S + 1e-9
         x += command.vx * math.cos(yaw) * dt
         y += command.vx * math.sin(yaw) * dt
         yaw += command.yaw_rate * dt
-    assert command.arrived and math.dist((x, y), (1.0, 1.0)) < 0.1
+        track.append((x, y, yaw))
+    return False, track
+
+
+def test_follower_brings_a_unicycle_to_the_goal_within_its_limits() -> None:
+    follower = PathFollower([(0.0, 0.0), (1.0, 0.0), (1.0, 1.0)])
+    arrived, track = _drive(follower, 0.0, 0.0, math.pi)  # starts facing away: it must turn in place first
+    assert arrived and math.dist(track[-1][:2], (1.0, 1.0)) < 0.1
 
 
 def test_follower_keeps_to_the_path_round_a_corner() -> None:
     """A robot that cut corners would walk into what the path goes round."""
-    follower = PathFollower([(0.0, 0.0), (1.0, 0.0), (1.0, 1.0)])
-    x, y, yaw, dt = 0.0, 0.0, 0.0, 0.1
-    worst = 0.0
-    for _ in range(2000):
-        command = follower.update(x, y, yaw)
-        if command.arrived:
-            break
-        x += command.vx * math.cos(yaw) * dt
-        y += command.vx * math.sin(yaw) * dt
-        yaw += command.yaw_rate * dt
-        worst = max(worst, min(abs(y) if x <= 1.0 else math.inf, abs(x - 1.0) if y >= 0.0 else math.inf))
-    assert command.arrived
+    arrived, track = _drive(PathFollower([(0.0, 0.0), (1.0, 0.0), (1.0, 1.0)]), 0.0, 0.0, 0.0)
+    worst = max(min(abs(y) if x <= 1.0 else math.inf, abs(x - 1.0) if y >= 0.0 else math.inf) for x, y, _ in track)
+    assert arrived
     assert worst < 0.1  # never more than 10 cm off the path
+
+
+def _open_costmap(blocked_boxes: tuple[tuple[float, float, float, float], ...] = ()) -> Costmap:
+    """A 4 x 3 m map centred on the origin, with the given boxes (x0, x1, y0, y1) blocked."""
+    resolution = 0.05
+    blocked = np.zeros((80, 60), dtype=bool)
+    costmap = Costmap(blocked, -2.0, -1.5, resolution)
+    for x0, x1, y0, y1 in blocked_boxes:
+        for i in range(80):
+            for j in range(60):
+                cx, cy = costmap.centre(i, j)
+                blocked[i, j] |= x0 <= cx <= x1 and y0 <= cy <= y1
+    return costmap
+
+
+def test_a_path_with_a_heading_to_arrive_with_ends_in_a_straight_lead_in_along_it() -> None:
+    costmap = _open_costmap()
+    goal, facing = (1.0, 0.0), math.pi / 2  # arrive going north, coming from the west
+    path = plan_path(costmap, (-1.0, 0.0), goal, facing)
+    assert path[-1] == goal
+    entry = path[-2]
+    assert entry == pytest.approx((goal[0], goal[1] - LEAD_IN_M), abs=1e-9)
+    assert _length(path) <= _length(plan_path(costmap, (-1.0, 0.0), goal)) + LEAD_IN_MAX_DETOUR_M
+
+
+def test_no_lead_in_where_it_does_not_fit_or_the_robot_is_already_there() -> None:
+    wall_behind = _open_costmap(((0.5, 1.5, -0.6, -0.1),))  # just south of the goal: no room to come from there
+    path = plan_path(wall_behind, (-1.0, 0.0), (1.0, 0.0), math.pi / 2)
+    assert path == plan_path(wall_behind, (-1.0, 0.0), (1.0, 0.0))  # the plain shortest path
+    near = plan_path(_open_costmap(), (1.0, -0.1), (1.0, 0.0), math.pi / 2)
+    assert near == [(1.0, -0.1), (1.0, 0.0)]  # 10 cm away: straight there
+
+
+def test_the_path_ends_where_the_approach_is_a_straight_walk_ahead() -> None:
+    """The staging point moves along its line (across the approach heading) to right behind the approach pose,
+    unless that point is taken."""
+    staging, pose = (1.29, 0.60), (1.40, 0.71, 0.0)  # the pose 11 cm to the left of the staging point's line
+    assert arrival_point(staging, pose, lambda x, y: False) == pytest.approx((1.29, 0.71))
+    assert arrival_point(staging, pose, lambda x, y: y > 0.65) == staging
+    assert arrival_point(staging, None, lambda x, y: False) == staging
+
+
+def test_a_follower_on_a_lead_in_path_arrives_lined_up_with_the_approach() -> None:
+    """Arriving sideways to the approach costs a slow turn at the surface (6-8 s measured); a path planned with the
+    heading to arrive with brings a robot coming from the side in lined up with it."""
+    path = plan_path(_open_costmap(), (-1.0, 0.0), (1.0, 0.0), math.pi / 2)
+    arrived, track = _drive(PathFollower(path), -1.0, 0.0, 0.0)
+    x, y, yaw = track[-1]
+    assert arrived and math.dist((x, y), (1.0, 0.0)) < 0.1
+    assert abs(math.remainder(yaw - math.pi / 2, math.tau)) < math.radians(10)
+
+
+def _length(path: list[tuple[float, float]]) -> float:
+    return sum(math.dist(a, b) for a, b in itertools.pairwise(path))

@@ -1,12 +1,24 @@
-"""The navigator's final approach: it stops on the goal, and settles even when stopping moves the robot."""
+"""The navigator: the final approach stops on the goal and settles even when stopping moves the robot; backing
+away before setting off; getting free of a turn that does not turn."""
 
 from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
-from robot.navigation.navigator import MAX_SETTLE_M, SETTLE_GROWTH_M, SETTLED_M, NavigationFailed, Navigator, StopDrift
+from robot.navigation.costmap import Costmap
+from robot.navigation.grid_planner import inflate
+from robot.navigation.navigator import (
+    MAX_SETTLE_M,
+    SETTLE_GROWTH_M,
+    SETTLED_M,
+    STUCK_S,
+    NavigationFailed,
+    Navigator,
+    StopDrift,
+)
 
 
 class DriftingBody:
@@ -97,3 +109,52 @@ def test_a_robot_that_cannot_stop_near_the_goal_fails_with_the_reason() -> None:
     with pytest.raises(NavigationFailed, match="could not settle on the goal pose"):
         Navigator(body, lambda: body.t).step_to((0.3, 0.0, 0.0))
     assert not body.walking()
+
+
+class MappedBody(DriftingBody):
+    """A `DriftingBody` on an open map, that cannot turn in place while it stands within `stuck_m` of where it
+    started (an arm pressed against the end of a wall, which no map shows)."""
+
+    def __init__(self, costmap: Costmap, stuck_m: float = 0.0) -> None:
+        super().__init__(drift_m=0.0)
+        self.map = costmap
+        self.stuck_m = stuck_m
+        self.track: list[tuple[float, float, float]] = []
+
+    def costmap(self, inflate_m: float) -> Costmap:  # type: ignore[override]
+        return Costmap(inflate(self.map.blocked, inflate_m / self.map.resolution), self.map.x0, self.map.y0,
+                       self.map.resolution)  # fmt: skip
+
+    def wait(self, seconds: float) -> None:
+        vx, vy, w = self.velocity
+        if vx == 0.0 and vy == 0.0 and math.hypot(self.x, self.y) < self.stuck_m:
+            self.velocity = (0.0, 0.0, 0.0)
+        super().wait(seconds)
+        self.velocity = (vx, vy, w)
+        self.track.append((self.x, self.y, self.yaw))
+
+
+def _map_with(*cells: tuple[float, float]) -> Costmap:
+    costmap = Costmap(np.zeros((80, 60), dtype=bool), -2.0, -1.5, 0.05)
+    for x, y in cells:
+        costmap.blocked[costmap.cell(x, y)] = True
+    return costmap
+
+
+def test_a_robot_backs_away_first_and_walks_on_into_its_path_without_stopping() -> None:
+    """Carrying something held out over a surface, it must not turn there; a stop and a restart cost ~3 s."""
+    body = MappedBody(_map_with())
+    report = Navigator(body, lambda: body.t).go((-1.0, 0.5), back_away_m=0.1)
+    first_turn = next(i for i, (_, _, yaw) in enumerate(body.track) if abs(yaw) > 0.05)
+    assert body.track[first_turn - 1][0] == pytest.approx(-0.1, abs=0.015)  # straight back 10 cm, then it turned
+    assert all(abs(y) < 1e-9 for _, y, _ in body.track[:first_turn])
+    assert body.stops == 1  # only at the end
+    assert report.final_error_m < 0.1
+
+
+def test_a_turn_in_place_that_does_not_turn_steps_clear_of_the_nearest_obstacle_and_goes_on() -> None:
+    body = MappedBody(_map_with((0.0, 0.2)), stuck_m=0.03)  # the end of a wall just to its left
+    report = Navigator(body, lambda: body.t).go((-1.0, -0.5))  # behind it: it must turn round first
+    assert min(y for _, y, _ in body.track) < -0.04  # it stepped away from the wall, to its right
+    assert report.final_error_m < 0.1
+    assert body.t < STUCK_S  # well before it would have given up as stuck

@@ -1,4 +1,5 @@
-"""`place_object`: where on a surface the held object goes, and the placing procedure's checks and failures."""
+"""`place_object`: where on a surface the held object goes (in front of the place, or anywhere in reach of where the
+robot stopped), and the placing procedure's checks and failures."""
 
 from __future__ import annotations
 
@@ -8,8 +9,16 @@ import numpy as np
 import pytest
 
 from robot.manipulation.arm_motion import HandMove, JointMove, Move
-from robot.manipulation.grasp_plan import GRASP_OFFSET, Stance
-from robot.manipulation.place import PLACE_DEPTH_M, SPACING_M, PlaceFailed, choose_spot, place
+from robot.manipulation.grasp_plan import GRASP_OFFSET, REACH_MARGIN_M, REACH_X, Stance
+from robot.manipulation.place import (
+    EDGE_MARGIN_M,
+    PLACE_DEPTH_M,
+    SPACING_M,
+    PlaceFailed,
+    choose_spot,
+    place,
+    spots_in_reach,
+)
 from robot.model.world import Box
 
 TABLE = Box("table", x=-1.2, y=0.75, half_x=0.3, half_y=0.25, height=0.2)
@@ -97,3 +106,27 @@ def test_an_object_not_seen_where_it_was_let_go_is_a_failure_that_says_so() -> N
     fell_off = SPOT + np.array([0.0, 0.08, -0.25])
     with pytest.raises(PlaceFailed, match="did not stay where it was put"):
         place("red mug", 0.05, SPOT, 0.0, FakeBody(IN_REACH, seen_after=fell_off))
+
+
+def test_a_toppled_object_fails_the_check_and_one_seen_a_little_low_is_standing() -> None:
+    toppled = SPOT + np.array([0.0, 0.0, 0.0175])  # a mug on its side shows its base centre this much higher
+    with pytest.raises(PlaceFailed, match="did not stay where it was put"):
+        place("red mug", 0.05, SPOT, 0.0, FakeBody(IN_REACH, seen_after=toppled))
+    seen_low = SPOT + np.array([0.02, 0.0, -0.013])  # the camera's error (seen once, the mug upright on the table)
+    assert place("red mug", 0.05, SPOT, 0.0, FakeBody(IN_REACH, seen_after=seen_low)).error_m == pytest.approx(0.02)
+
+
+def test_spots_in_reach_of_where_the_robot_stopped_lie_on_the_surface_nearest_the_middle_of_the_reach() -> None:
+    # standing 21 cm in front of the near edge, facing the table: the middle of the reach is on it
+    spots = spots_in_reach(TABLE, (-1.2, 0.29, math.pi / 2), [])
+    assert spots[0] == pytest.approx([-1.2 + 0.11, 0.29 + 0.31, 0.2], abs=0.006)  # 31 cm ahead, 11 cm right
+    # standing 4 cm further back: only the far part of the reach is on the table, at least EDGE_MARGIN_M in
+    far = spots_in_reach(TABLE, (-1.2, 0.25, math.pi / 2), [])
+    assert far and all(TABLE.contains(float(s[0]), float(s[1]), -EDGE_MARGIN_M) for s in far)
+    ahead = [float(s[1]) - 0.25 for s in far]
+    assert REACH_X[0] + REACH_MARGIN_M - 1e-9 <= min(ahead) and max(ahead) <= REACH_X[1] - REACH_MARGIN_M + 1e-9
+    # what stands there already is kept clear of; facing away or too far, nothing is in reach
+    taken = spots_in_reach(TABLE, (-1.2, 0.29, math.pi / 2), [(-1.09, 0.6)])
+    assert all(math.dist(s[:2], (-1.09, 0.6)) >= SPACING_M for s in taken)
+    assert spots_in_reach(TABLE, (-1.2, 0.29, -math.pi / 2), []) == []
+    assert spots_in_reach(TABLE, (-1.2, 0.05, math.pi / 2), []) == []
