@@ -97,15 +97,16 @@ def simplify(
     out = [path[0]]
     anchor = 0
     for k in range(2, len(path)):
-        if not _line_free(path[anchor], path[k], blocked_at, step):
+        if not line_free(path[anchor], path[k], blocked_at, step):
             out.append(path[k - 1])
             anchor = k - 1
     out.append(path[-1])
     return out
 
 
-def _line_free(
+def line_free(
     a: tuple[float, float], b: tuple[float, float], blocked_at: Callable[[float, float], bool], step: float
 ) -> bool:
+    """Whether the straight line from a to b crosses no blocked point (checked every `step` m)."""
     n = max(1, math.ceil(math.dist(a, b) / step))
     return not any(blocked_at(a[0] + (b[0] - a[0]) * t / n, a[1] + (b[1] - a[1]) * t / n) for t in range(n + 1))

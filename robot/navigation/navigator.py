@@ -26,7 +26,7 @@ from robot.interface import NavigationState
 from robot.model.world import NAV_CLEARANCE_M, ROBOT_RADIUS
 from robot.navigation.costmap import Costmap
 from robot.navigation.follower import RUN_ON_END_SPEED, STOP_END_SPEED, FollowCommand, PathFollower
-from robot.navigation.grid_planner import astar, nearest_free, simplify
+from robot.navigation.grid_planner import astar, line_free, nearest_free, simplify
 
 CLEARANCE_M = NAV_CLEARANCE_M  # beyond the footprint: a walking robot sways, and its arms reach past its feet
 CONTROL_PERIOD_S = 0.1
@@ -115,7 +115,8 @@ def plan_path(costmap: Costmap, start: tuple[float, float], goal: tuple[float, f
         return direct
     for lead_in in (LEAD_IN_M, LEAD_IN_M / 2):
         entry = (goal[0] - lead_in * math.cos(facing), goal[1] - lead_in * math.sin(facing))
-        if _path_length([start, goal]) < 1.5 * lead_in or not _line_free(costmap, entry, goal):
+        step = costmap.resolution / 2
+        if _path_length([start, goal]) < 1.5 * lead_in or not line_free(entry, goal, costmap.blocked_at, step):
             continue
         try:
             path = [*_shortest_path(costmap, start, entry), goal]
@@ -180,12 +181,6 @@ def _away_from_nearest(costmap: Costmap, x: float, y: float, within_m: float) ->
 
 def _path_length(points: list[tuple[float, float]]) -> float:
     return sum(math.dist(a, b) for a, b in itertools.pairwise(points))
-
-
-def _line_free(costmap: Costmap, a: tuple[float, float], b: tuple[float, float]) -> bool:
-    steps = max(1, math.ceil(math.dist(a, b) / (costmap.resolution / 2)))
-    return not any(costmap.blocked_at(a[0] + (b[0] - a[0]) * k / steps, a[1] + (b[1] - a[1]) * k / steps)
-                   for k in range(steps + 1))  # fmt: skip
 
 
 def arrival_point(staging: tuple[float, float], pose: tuple[float, float, float] | None,
