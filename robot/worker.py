@@ -79,7 +79,7 @@ from robot.model.scene import scene_xml
 from robot.model.world import ROBOT_RADIUS, Place, WorldLayout
 from robot.navigation.costmap import Costmap
 from robot.navigation.goal import parse_pose_goal
-from robot.navigation.navigator import NavigationFailed, Navigator, StopDrift
+from robot.navigation.navigator import CARRYING_CLEARANCE_M, CLEARANCE_M, NavigationFailed, Navigator, StopDrift
 from robot.perception.geometry import matrix_to_quat_wxyz, yaw_of
 from robot.perception.search import ObjectNotFound, find_object
 from robot.perception.sensor_process import SensorError
@@ -471,8 +471,11 @@ class RobotWorker:
         return carry_back_away_m(self.layout, NavBodyOfWorker(self, ctx).pose())
 
     def _navigator(self, ctx: ExecutionContext) -> Navigator:
-        """A navigator on this robot's legs and map, sharing what its stops have taught (`StopDrift`)."""
-        return Navigator(NavBodyOfWorker(self, ctx), lambda: self._sim_time, self._set_navigation, self._stop_drift)
+        """A navigator on this robot's legs and map, sharing what its stops have taught (`StopDrift`), keeping a wider
+        berth from obstacles while it carries something."""
+        clearance = CARRYING_CLEARANCE_M if self._held_object else CLEARANCE_M
+        return Navigator(NavBodyOfWorker(self, ctx), lambda: self._sim_time, self._set_navigation, self._stop_drift,
+                         clearance)  # fmt: skip
 
     def _work_pose(self, place: Place, ctx: ExecutionContext,
                    ) -> tuple[tuple[float, float, float], Callable[[], bool] | None]:  # fmt: skip

@@ -132,3 +132,37 @@ def test_a_follower_on_a_lead_in_path_arrives_lined_up_with_the_approach() -> No
 
 def _length(path: list[tuple[float, float]]) -> float:
     return sum(math.dist(a, b) for a, b in itertools.pairwise(path))
+
+
+def _grown(costmap: Costmap, margin_m: float) -> Costmap:
+    return Costmap(inflate(costmap.blocked, margin_m / costmap.resolution), costmap.x0, costmap.y0,
+                   costmap.resolution)  # fmt: skip
+
+
+def _closest_approach(path: list[tuple[float, float]], box: tuple[float, float, float, float]) -> float:
+    x0, x1, y0, y1 = box
+    closest = math.inf
+    for a, b in itertools.pairwise(path):
+        for t in np.linspace(0.0, 1.0, 200):
+            x, y = a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])
+            closest = min(closest, math.hypot(max(x0 - x, 0.0, x - x1), max(y0 - y, 0.0, y - y1)))
+    return closest
+
+
+def test_a_roomy_map_gives_a_wider_berth_round_a_wall_end_where_there_is_room() -> None:
+    """A carrying robot's arm sticks out: round the end of a wall (a doorway) its path keeps the wider berth."""
+    wall = (-0.025, 0.025, -1.5, 0.0)  # the south half of the room walled off: round its end at (0, 0)
+    world = _open_costmap((wall,))
+    usual, roomy = _grown(world, 0.24), _grown(world, 0.30)
+    plain = plan_path(usual, (-1.0, -0.5), (1.0, -0.5))
+    wide = plan_path(usual, (-1.0, -0.5), (1.0, -0.5), roomy=roomy)
+    assert 0.2 < _closest_approach(plain, wall) < 0.25
+    assert _closest_approach(wide, wall) > _closest_approach(plain, wall) + 0.04
+
+
+def test_where_the_wider_berth_does_not_fit_the_usual_one_is_kept() -> None:
+    gap = ((-0.025, 0.025, -1.5, -0.3), (-0.025, 0.025, 0.3, 1.5))  # a 0.6 m doorway: room for 0.24, not 0.4
+    world = _open_costmap(gap)
+    path = plan_path(_grown(world, 0.24), (-1.0, 0.0), (1.0, 0.0), roomy=_grown(world, 0.40))
+    assert path[0] == (-1.0, 0.0) and path[-1] == (1.0, 0.0)
+    assert min(_closest_approach(path, box) for box in gap) > 0.2

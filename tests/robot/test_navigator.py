@@ -104,6 +104,14 @@ def test_a_stop_the_caller_accepts_ends_the_approach_even_off_the_exact_pose() -
     assert report.final_error_m == pytest.approx(MAX_SETTLE_M - 0.01, abs=0.01)
 
 
+def test_a_correction_from_standing_near_the_goal_walks_onto_it_instead_of_stopping_where_it_stands() -> None:
+    """At a counter's end the reach leaves 3 cm of margin: 2 cm and 3 deg off may be out of reach."""
+    body = DriftingBody(drift_m=0.0)
+    body.yaw = math.radians(-2.9)
+    report = Navigator(body, lambda: body.t).step_to((0.012, 0.015, 0.0))  # 1.9 cm off
+    assert body.stops == 1 and report.final_error_m < 0.01 and report.final_heading_error_deg < 1.5
+
+
 def test_a_robot_that_cannot_stop_near_the_goal_fails_with_the_reason() -> None:
     body = DriftingBody(drift_m=MAX_SETTLE_M + 0.04)
     with pytest.raises(NavigationFailed, match="could not settle on the goal pose"):
@@ -158,3 +166,19 @@ def test_a_turn_in_place_that_does_not_turn_steps_clear_of_the_nearest_obstacle_
     assert min(y for _, y, _ in body.track) < -0.04  # it stepped away from the wall, to its right
     assert report.final_error_m < 0.1
     assert body.t < STUCK_S  # well before it would have given up as stuck
+
+
+def test_the_path_end_follows_the_approach_pose_when_what_the_robot_sees_moves_it() -> None:
+    """The mug seen 30 cm left of where the counter's default stance assumed: the path bends to the new stance
+    instead of leaving a 30 cm sidestep to the slow final approach."""
+    body = MappedBody(_map_with())
+    seen = {"mug": False}
+
+    def work_pose() -> tuple[float, float, float]:
+        seen["mug"] = seen["mug"] or body.x > 0.3  # the camera sees it on the way
+        return (1.5, 0.3, 0.0) if seen["mug"] else (1.5, 0.0, 0.0)
+
+    report = Navigator(body, lambda: body.t).go((1.2, 0.0), work_pose)
+    at_staging_line = next(y for x, y, _ in body.track if x > 1.15)
+    assert at_staging_line > 0.25  # already in line with the new stance when the path ended
+    assert report.final_error_m < 0.035 and report.replans == 0  # a moved goal is not a blocked path
