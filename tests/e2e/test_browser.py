@@ -34,10 +34,10 @@ def test_chromium_is_installed() -> None:
 
 
 def test_the_3d_mirror_renders_in_a_cross_site_frame(page, server) -> None:
-    src = page.get_attribute("#scene", "src")
     # Page on 127.0.0.1, scene on localhost: another site. Headless Chromium renders WebGL in software, so the
-    # page picks the light view at half resolution.
-    assert src == f"http://localhost:{server.viser_light_port}/?fixedDpr=0.5"
+    # page picks the light view at half resolution (its script sets the frame's source after probing WebGL: wait).
+    expected = f"http://localhost:{server.viser_light_port}/?fixedDpr=0.5"
+    playwright_api.expect(page.locator("#scene")).to_have_attribute("src", expected)
     assert wait_for_scene_render(page) > 8.0
     playwright_api.expect(page.locator("#conn")).to_have_text("connected")
 
