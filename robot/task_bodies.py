@@ -112,7 +112,8 @@ class NavBodyOfWorker:
     def __init__(self, worker: RobotWorker, ctx: ExecutionContext) -> None:
         self._worker = worker
         self._ctx = ctx
-        self._cached: tuple[int, float, Costmap] | None = None
+        self._scans = -1  # the map the costmaps below were grown from
+        self._costmaps: dict[float, Costmap] = {}  # by inflation: navigation asks for a few each scan
 
     def pose(self) -> tuple[float, float, float]:
         position, rotation = self._worker._map_trunk()
@@ -123,9 +124,11 @@ class NavBodyOfWorker:
         grid = perception.feed().map if perception is not None else None
         if grid is None:
             return None
-        if self._cached is None or self._cached[0] != grid.scans or self._cached[1] != inflate_m:
-            self._cached = (grid.scans, inflate_m, Costmap.from_map(grid, inflate_m))
-        return self._cached[2]
+        if grid.scans != self._scans:
+            self._scans, self._costmaps = grid.scans, {}
+        if inflate_m not in self._costmaps:
+            self._costmaps[inflate_m] = Costmap.from_map(grid, inflate_m)
+        return self._costmaps[inflate_m]
 
     def drive(self, vx: float, vy: float, yaw_rate: float) -> None:
         velocity = clip_velocity(Velocity(vx, vy, yaw_rate), self._worker._loco.velocity.limits)

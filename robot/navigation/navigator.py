@@ -32,8 +32,15 @@ CLEARANCE_M = NAV_CLEARANCE_M  # beyond the footprint: a walking robot sways, an
 # Carrying something, the arm is held out to the front and side, and pure pursuit cuts a corner by a few cm: at
 # 0.2 m/s a carrying robot's shoulder hit the end of a wall it was rounding at a doorway, and it fell (world seed 4).
 CARRYING_CLEARANCE_M = CLEARANCE_M + 0.04
+# A path keeping a wider berth than the usual (carrying something, or round something just found in the way) is
+# taken only if it is no more than this much longer (m): a wider berth may not fit a doorway, and the long way
+# round ran into unmapped space and replanned five times over (world seed 4).
+ROOMY_MAX_DETOUR_M = 0.5
+# A path round something just found in the way keeps a wider berth from it where there is room: the object's
+# footprint on the map grows as the robot sees more of it, and the robot is close to it when it turns away.
+DETOUR_CLEARANCE_M = CLEARANCE_M + 0.06
 CONTROL_PERIOD_S = 0.1
-REPLAN_CHECK_S = 0.5
+RETARGET_CHECK_S = 0.5
 # Where the approach ends may change on the way (the camera sees the object the robot walks to): the path's end
 # follows it when it moves more than RETARGET_M, while more than RETARGET_MIN_REMAINING_M of the path is left, at
 # most MAX_RETARGETS times (a pick at the counter sidestepped 11 cm at 0.05 m/s in its final approach otherwise).
@@ -139,11 +146,22 @@ def plan_path(costmap: Costmap, start: tuple[float, float], goal: tuple[float, f
 
 def _shortest_path(costmap: Costmap, start: tuple[float, float], goal: tuple[float, float],
                    roomy: Costmap | None = None) -> list[tuple[float, float]]:  # fmt: skip
-    if roomy is not None:
-        try:
-            return _shortest_path(roomy, start, goal)
-        except NavigationFailed:
-            pass  # no room for the wider berth: the usual one
+    usual = _shortest_path_on(costmap, start, goal)
+    if roomy is None:
+        return usual
+    try:
+        path = _shortest_path_on(roomy, start, goal)
+    except NavigationFailed:
+        return usual  # no room for the wider berth
+    # not the long way round (a doorway too narrow for the wider berth), and not out of a start in the wider berth's
+    # margin across the usual one's
+    if _path_length(path) > _path_length(usual) + ROOMY_MAX_DETOUR_M or _path_blocked(costmap, PathFollower(path)):
+        return usual
+    return path
+
+
+def _shortest_path_on(costmap: Costmap, start: tuple[float, float],
+                      goal: tuple[float, float]) -> list[tuple[float, float]]:  # fmt: skip
     ends = nearest_free(costmap.blocked, costmap.cell(*start)), nearest_free(costmap.blocked, costmap.cell(*goal))
     if None in ends:
         raise NavigationFailed(f"path blocked: no free space near ({goal[0]:.2f}, {goal[1]:.2f})")
@@ -162,15 +180,18 @@ class _TurnWatch:
 
     since: float | None = None
     start_yaw: float = 0.0
+    direction: float = 0.0  # the way the turn watched is commanded: -1 or 1
 
     def stalled(self, command: FollowCommand, yaw: float, now: float) -> bool:
+        """Only turning the commanded way counts: a robot pressed against a box is also turned back by it."""
+        direction = math.copysign(1.0, command.yaw_rate)
         if command.vx != 0.0 or command.yaw_rate == 0.0:
             self.since = None
             return False
-        if self.since is None:
-            self.since, self.start_yaw = now, yaw
+        if self.since is None or direction != self.direction:
+            self.since, self.start_yaw, self.direction = now, yaw, direction
             return False
-        if abs(math.remainder(yaw - self.start_yaw, math.tau)) > TURN_STALL_RAD:
+        if direction * math.remainder(yaw - self.start_yaw, math.tau) > TURN_STALL_RAD:
             self.since, self.start_yaw = now, yaw
             return False
         return now - self.since > TURN_STALL_S
@@ -339,13 +360,15 @@ class Navigator:
             body.drive(-BACK_AWAY_M_S, 0.0, heading)
             body.wait(CONTROL_PERIOD_S)
 
-    def _plan(self, goal: tuple[float, float], facing: float | None,
-              start: tuple[float, float] | None = None) -> list[tuple[float, float]]:  # fmt: skip
-        """A path from `start` (where the robot is, if not given) to `goal` on the current map, or raise."""
+    def _plan(self, goal: tuple[float, float], facing: float | None, start: tuple[float, float] | None = None,
+              clearance_m: float | None = None) -> list[tuple[float, float]]:  # fmt: skip
+        """A path from `start` (where the robot is, if not given) to `goal` on the current map, or raise; keeping
+        `clearance_m` (the navigator's own if not given) where there is room."""
         costmap = self._costmap()
+        clearance_m = self.clearance_m if clearance_m is None else max(clearance_m, self.clearance_m)
         roomy = None
-        if self.clearance_m > CLEARANCE_M:
-            roomy = self.body.costmap(ROBOT_RADIUS + self.clearance_m)
+        if clearance_m > CLEARANCE_M:
+            roomy = self.body.costmap(ROBOT_RADIUS + clearance_m)
         return plan_path(costmap, self.body.pose()[:2] if start is None else start, goal, facing, roomy)
 
     def _costmap(self) -> Costmap:
@@ -370,6 +393,8 @@ class Navigator:
         best_remaining = math.inf
         turn = _TurnWatch()
         retargets = 0
+        checked_map: Costmap | None = None  # the last map the path was checked on, and when
+        checked_at = -math.inf
         while True:
             self._check_fall()
             x, y, yaw = body.pose()
@@ -394,7 +419,7 @@ class Navigator:
                 self._stop()
                 left = command.remaining_m
                 raise NavigationFailed(f"stuck: no progress for {STUCK_S:.0f} s, {left:.2f} m from the goal")
-            if now - last_check >= REPLAN_CHECK_S:
+            if now - last_check >= RETARGET_CHECK_S:
                 last_check = now
                 moved = self._moved_goal(goal, retarget, command.remaining_m) if retargets < MAX_RETARGETS else None
                 if moved is not None:
@@ -409,7 +434,10 @@ class Navigator:
                         self._on_update(NavigationState(self._goal, report.path, report.replans))
                         follower = PathFollower(path, end_speed)
                         continue
-                if _path_blocked(self._costmap(), follower):
+            costmap = self._costmap()
+            if costmap is not checked_map and now > checked_at:  # a new map: is the way still clear?
+                checked_map, checked_at = costmap, now
+                if _path_blocked(costmap, follower):
                     report.walked_m += follower.progress
                     path = self._replan((x, y), goal, facing)
                     report.replans += 1
@@ -455,7 +483,7 @@ class Navigator:
         """A new path, found without breaking stride when the map has one (a stop and a restart cost about 3 s);
         otherwise stop and wait for the way to clear."""
         try:
-            return self._plan(goal, facing, start)
+            return self._plan(goal, facing, start, DETOUR_CLEARANCE_M)
         except NavigationFailed:
             self._stop()
             return self._plan_or_wait(start, goal, facing)

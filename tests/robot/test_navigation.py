@@ -166,3 +166,13 @@ def test_where_the_wider_berth_does_not_fit_the_usual_one_is_kept() -> None:
     path = plan_path(_grown(world, 0.24), (-1.0, 0.0), (1.0, 0.0), roomy=_grown(world, 0.40))
     assert path[0] == (-1.0, 0.0) and path[-1] == (1.0, 0.0)
     assert min(_closest_approach(path, box) for box in gap) > 0.2
+
+
+def test_a_wider_berth_that_only_fits_the_long_way_round_is_not_taken() -> None:
+    """A doorway with room for the usual berth only, and a wide opening far off: through the doorway."""
+    wall = ((-0.025, 0.025, -1.5, -0.3), (-0.025, 0.025, 0.3, 0.6))  # doorway at |y| < 0.3; open above y = 0.6
+    world = _open_costmap(wall)
+    usual = plan_path(_grown(world, 0.24), (-1.0, -0.5), (1.0, -0.5))
+    path = plan_path(_grown(world, 0.24), (-1.0, -0.5), (1.0, -0.5), roomy=_grown(world, 0.40))
+    assert max(y for _, y in path) < 0.3  # not round by the far opening
+    assert _length(path) == pytest.approx(_length(usual))

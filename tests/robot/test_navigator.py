@@ -11,6 +11,7 @@ import pytest
 from robot.navigation.costmap import Costmap
 from robot.navigation.grid_planner import inflate
 from robot.navigation.navigator import (
+    CONTROL_PERIOD_S,
     MAX_SETTLE_M,
     SETTLE_GROWTH_M,
     SETTLED_M,
@@ -128,6 +129,7 @@ class MappedBody(DriftingBody):
         self.map = costmap
         self.stuck_m = stuck_m
         self.track: list[tuple[float, float, float]] = []
+        self.commands: list[tuple[float, float, float]] = []  # as driven, one per wait
 
     def costmap(self, inflate_m: float) -> Costmap:  # type: ignore[override]
         return Costmap(inflate(self.map.blocked, inflate_m / self.map.resolution), self.map.x0, self.map.y0,
@@ -140,6 +142,7 @@ class MappedBody(DriftingBody):
         super().wait(seconds)
         self.velocity = (vx, vy, w)
         self.track.append((self.x, self.y, self.yaw))
+        self.commands.append(self.velocity)
 
 
 def _map_with(*cells: tuple[float, float]) -> Costmap:
@@ -182,3 +185,47 @@ def test_the_path_end_follows_the_approach_pose_when_what_the_robot_sees_moves_i
     at_staging_line = next(y for x, y, _ in body.track if x > 1.15)
     assert at_staging_line > 0.25  # already in line with the new stance when the path ended
     assert report.final_error_m < 0.035 and report.replans == 0  # a moved goal is not a blocked path
+
+
+class PushedBackBody(MappedBody):
+    """Pressed against a box it cannot see on the map: turning in place there, it wobbles about where it started
+    (+-14 deg), the box turning it back each time."""
+
+    def wait(self, seconds: float) -> None:
+        vx, vy, w = self.velocity
+        pressed = vx == 0.0 and vy == 0.0 and w != 0.0 and math.hypot(self.x, self.y) < self.stuck_m
+        super().wait(seconds)
+        if pressed:
+            self.yaw = 0.25 * math.sin(3.0 * self.t)
+
+
+def test_a_turn_that_only_wobbles_against_something_is_noticed_as_not_turning() -> None:
+    body = PushedBackBody(_map_with((0.0, 0.2)), stuck_m=0.03)
+    report = Navigator(body, lambda: body.t).go((-1.0, -0.5))  # behind it: it must turn round first
+    assert report.final_error_m < 0.1
+    assert body.t < STUCK_S  # it stepped clear instead of wobbling until it gave up as stuck
+
+
+class BoxDroppedBody(MappedBody):
+    """A box lands across its way at `drop_at_s` (the next map shows it)."""
+
+    def __init__(self, costmap: Costmap, box: tuple[float, float], drop_at_s: float) -> None:
+        super().__init__(costmap)
+        self.box, self.drop_at_s = box, drop_at_s
+
+    def costmap(self, inflate_m: float) -> Costmap:  # type: ignore[override]
+        if self.t >= self.drop_at_s:
+            for dx in (-0.05, 0.0, 0.05):
+                for dy in (-0.05, 0.0, 0.05):
+                    self.map.blocked[self.map.cell(self.box[0] + dx, self.box[1] + dy)] = True
+        return super().costmap(inflate_m)
+
+
+def test_a_box_dropped_in_the_way_is_answered_with_a_new_path_on_the_next_map() -> None:
+    """Each new map is checked, not every half second: at 0.2 m/s, 0.4 s is 8 cm nearer the box."""
+    body = BoxDroppedBody(_map_with(), box=(1.0, 0.0), drop_at_s=1.25)
+    replanned_at: list[float] = []
+    navigator = Navigator(body, lambda: body.t, lambda state: replanned_at.append(body.t) if state.replans else None)
+    report = navigator.go((1.8, 0.0))
+    assert report.replans >= 1 and report.final_error_m < 0.1
+    assert replanned_at[0] - body.drop_at_s <= CONTROL_PERIOD_S + 1e-6
