@@ -300,8 +300,8 @@ def _arm_back_moves() -> list[Move]:
     stand = humanoid_v1.stand_posture()
     return [
         JointMove({**SWING_BACK, "r_grip": 0.0}, 1.2, "swing back"),
-        JointMove({"r_el": 0.0, "r_wrist": 0.0, "r_sho_pitch": 0.0}, 1.0, "unfold upright"),
-        JointMove({n: stand[n] for n in ("r_sho_roll", "l_sho_pitch", "l_sho_roll", "l_el")}, 1.0, "arms down"),
+        JointMove({"r_el": 0.0, "r_wrist": 0.0, "r_sho_pitch": 0.0}, 0.8, "unfold upright"),
+        JointMove({n: stand[n] for n in ("r_sho_roll", "l_sho_pitch", "l_sho_roll", "l_el")}, 0.8, "arms down"),
     ]
 
 

@@ -78,8 +78,16 @@ from robot.model import humanoid_v1
 from robot.model.scene import scene_xml
 from robot.model.world import ROBOT_RADIUS, Place, WorldLayout
 from robot.navigation.costmap import Costmap
+from robot.navigation.follower import MAX_FORWARD_M_S
 from robot.navigation.goal import parse_pose_goal
-from robot.navigation.navigator import CARRYING_CLEARANCE_M, CLEARANCE_M, NavigationFailed, Navigator, StopDrift
+from robot.navigation.navigator import (
+    CARRYING_CLEARANCE_M,
+    CLEARANCE_M,
+    OPEN_M_S,
+    NavigationFailed,
+    Navigator,
+    StopDrift,
+)
 from robot.perception.geometry import matrix_to_quat_wxyz, yaw_of
 from robot.perception.search import ObjectNotFound, find_object
 from robot.perception.sensor_process import SensorError
@@ -473,9 +481,11 @@ class RobotWorker:
     def _navigator(self, ctx: ExecutionContext) -> Navigator:
         """A navigator on this robot's legs and map, sharing what its stops have taught (`StopDrift`), keeping a wider
         berth from obstacles while it carries something."""
-        clearance = CARRYING_CLEARANCE_M if self._held_object else CLEARANCE_M
+        carrying = self._held_object is not None
+        clearance = CARRYING_CLEARANCE_M if carrying else CLEARANCE_M
+        speed = MAX_FORWARD_M_S if carrying else OPEN_M_S
         return Navigator(NavBodyOfWorker(self, ctx), lambda: self._sim_time, self._set_navigation, self._stop_drift,
-                         clearance)  # fmt: skip
+                         clearance, speed)  # fmt: skip
 
     def _work_pose(self, place: Place, ctx: ExecutionContext,
                    ) -> tuple[tuple[float, float, float], Callable[[], bool] | None]:  # fmt: skip

@@ -122,10 +122,10 @@ def arm_out_moves() -> list[Move]:
     arm sideways (opening the gripper out there), turn it flat, fold the elbow, swing it forward (a straight hand
     path would sweep through the counter). The left arm swings back for the crouch (LEFT_ARM_BACK)."""
     return [
-        JointMove({**RIGHT_ARM_OUT, **LEFT_ARM_BACK, "r_grip": humanoid_v1.FINGER_TRAVEL}, 1.0, "raise sideways"),
-        JointMove({"r_sho_pitch": 1.57}, 0.8, "turn flat"),
-        JointMove({"r_el": 1.8, "r_wrist": -0.9}, 0.8, "fold"),
-        JointMove({"r_sho_roll": -0.8}, 1.0, "swing forward"),
+        JointMove({**RIGHT_ARM_OUT, **LEFT_ARM_BACK, "r_grip": humanoid_v1.FINGER_TRAVEL}, 0.8, "raise sideways"),
+        JointMove({"r_sho_pitch": 1.57}, 0.6, "turn flat"),
+        JointMove({"r_el": 1.8, "r_wrist": -0.9}, 0.6, "fold"),
+        JointMove({"r_sho_roll": -0.8}, 0.8, "swing forward"),
     ]
 
 

@@ -4,15 +4,18 @@ away before setting off; getting free of a turn that does not turn."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 import pytest
 
 from robot.navigation.costmap import Costmap
+from robot.navigation.follower import MAX_FORWARD_M_S
 from robot.navigation.grid_planner import inflate
 from robot.navigation.navigator import (
     CONTROL_PERIOD_S,
     MAX_SETTLE_M,
+    OPEN_M_S,
     SETTLE_GROWTH_M,
     SETTLED_M,
     STUCK_S,
@@ -229,3 +232,29 @@ def test_a_box_dropped_in_the_way_is_answered_with_a_new_path_on_the_next_map() 
     report = navigator.go((1.8, 0.0))
     assert report.replans >= 1 and report.final_error_m < 0.1
     assert replanned_at[0] - body.drop_at_s <= CONTROL_PERIOD_S + 1e-6
+
+
+def _speeds(body: MappedBody, where: Callable[[float, float], bool]) -> list[float]:
+    return [vx for (x, y, _), (vx, _, _) in zip(body.track, body.commands, strict=True) if where(x, y)]
+
+
+def test_in_the_open_a_robot_with_free_hands_walks_faster_but_not_through_a_doorway_nor_into_its_stop() -> None:
+    """At 0.2 m/s its feet swing 7-8 cm off the path: too much beside a doorway's sides; and it stops as it would
+    from the usual speed."""
+    # a wall at x = 1.6 with a doorway 0.55 m wide (wall cells centred 0.275 m either side of y = 0)
+    world = Costmap(np.zeros((120, 60), dtype=bool), -2.0, -1.5, 0.05)
+    for y in np.arange(0.26, 1.5, 0.05):
+        world.blocked[world.cell(1.6, y)] = world.blocked[world.cell(1.6, -y)] = True
+    body = MappedBody(world)
+    report = Navigator(body, lambda: body.t).go((3.0, 0.0))
+    assert report.final_error_m < 0.1
+    assert max(_speeds(body, lambda x, y: x < 0.5)) == pytest.approx(OPEN_M_S)  # the open, far from the wall
+    assert max(_speeds(body, lambda x, y: abs(x - 1.6) < 0.2)) <= MAX_FORWARD_M_S + 1e-9  # the doorway
+    assert max(_speeds(body, lambda x, y: x > 2.5)) <= MAX_FORWARD_M_S + 1e-9  # its last half metre
+
+
+def test_a_robot_carrying_something_keeps_to_the_usual_speed_in_the_open() -> None:
+    body = MappedBody(_map_with())
+    report = Navigator(body, lambda: body.t, open_speed_m_s=MAX_FORWARD_M_S).go((2.0, 0.0))
+    assert report.final_error_m < 0.1
+    assert max(vx for vx, _, _ in body.commands) == pytest.approx(MAX_FORWARD_M_S)
