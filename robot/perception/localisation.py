@@ -36,6 +36,8 @@ FIELD_EVERY = 10  # scans between rebuilds of the likelihood field
 MIN_POINTS = 60
 COARSE = (0.02, 4)  # step (m), steps each side
 FINE = (0.0025, 4)
+# A scan is matched only where its end points already lie this well on the field (a share of a perfect score).
+MIN_OVERLAP = 0.3
 BETTER_BY = 1.005  # the best candidate must beat the current correction by 0.5 %
 GAIN = 1.0  # share of the way to the best candidate taken per scan
 
@@ -89,6 +91,8 @@ class ScanMatcher:
         c, s = math.cos(heading), math.sin(heading)
         world = np.stack([c * local[:, 0] - s * local[:, 1], s * local[:, 0] + c * local[:, 1]], axis=-1)
         current = float(self._score(world, np.array([[x, y]]))[0])
+        if current < MIN_OVERLAP * len(world):
+            return  # mostly surfaces not seen before (a new room): nothing to match them against yet
         best_xy, best = np.array([x, y]), current
         for step, n in (COARSE, FINE):
             offsets = step * np.arange(-n, n + 1)
