@@ -241,9 +241,15 @@ class ArmBody:
         worker._release_arm(worker._arm_motion().targets)
         self._wait_standing()
 
-    def stow_arm(self) -> None:
+    def stow_arm(self, finish_in_background: bool = False) -> None:
         worker = self._worker
-        self.arm(_standing_up_with(_arm_back_moves(), worker._default_stand))
+        first, *rest = _standing_up_with(_arm_back_moves(), worker._default_stand)
+        if finish_in_background:
+            # the hand is out of the camera's view once swung back: the rest (1.6 s) goes on while the next steps run
+            self.arm([first])
+            worker._finish_arm_in_background(rest)
+            return
+        self.arm([first, *rest])
         worker._release_arm(None)
         self._wait_standing()
 

@@ -10,6 +10,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import math
 import queue
@@ -68,7 +69,7 @@ from robot.interface import (
     StopTeleop,
     Teleop,
 )
-from robot.manipulation.arm_motion import ArmMotion
+from robot.manipulation.arm_motion import ArmMotion, Move
 from robot.manipulation.grasp_plan import grasp_stance
 from robot.manipulation.pick import PickFailed, pick
 from robot.manipulation.place import PlaceFailed, choose_spot, spots_in_reach
@@ -191,6 +192,9 @@ class RobotWorker:
         self._task_velocity = Velocity()  # what a running plan step asks the legs for (turning to look)
         self._arm: ArmMotion | None = None  # whole-body reaching; built on first use (placo loads a model)
         self._arm_active = False  # the arm motion owns the joints (reaching, grasping, standing up)
+        # The arm finishes its queued moves on its own (stowing after a place), then the control thread hands the
+        # joints back: the robot's next body step waits for that.
+        self._arm_finishing = False
         self._default_stand = self._stand.copy()
         self._perception = (
             PerceptionService(layout, self._board_latest, self._bus.publish, realtime) if perception else None
@@ -308,6 +312,8 @@ class RobotWorker:
         capabilities["navigate_to"] = self._navigate_to
         capabilities["pick_object"] = self._pick_object
         capabilities["place_object"] = self._place_object
+        for action in ("detect_object", "navigate_to", "pick_object", "place_object"):
+            capabilities[action] = self._after_arm_finished(capabilities[action])
         return capabilities
 
     def _pick_object(self, args: dict[str, str], ctx: ExecutionContext) -> str:
@@ -407,6 +413,34 @@ class RobotWorker:
                 arm.start(self._targets.copy(), "right")
                 self._arm_active = True
         return arm
+
+    def _finish_arm_in_background(self, moves: list[Move]) -> None:
+        """Play `moves` on the arm without waiting, then stand with the arms in the default posture."""
+        arm = self._take_arm()
+        with self._lock:
+            arm.queue(*moves)
+            self._arm_finishing = True
+
+    def _wait_arm_finished(self, cancel: threading.Event) -> None:
+        """Block until an arm left finishing in the background has handed the joints back and the robot stands."""
+        waited = False
+        while True:
+            with self._lock:
+                if self._fallen or not (self._arm_finishing or waited):
+                    return  # a step sees a fall itself
+                if not self._arm_finishing and self._posture.settled:
+                    return
+            waited = True
+            self._wait_sim(0.02, cancel)
+
+    def _after_arm_finished(self, capability: Capability) -> Capability:
+        """The capability, run once the arm has finished what it was left doing (it needs the joints)."""
+
+        def run(args: dict[str, str], ctx: ExecutionContext) -> str:
+            self._wait_arm_finished(ctx.cancel)
+            return capability(args, ctx)
+
+        return run
 
     def _release_arm(self, upper_body: np.ndarray | None) -> None:
         """Hand the joints back to the posture controller and walking: with the upper body held as in
@@ -629,6 +663,7 @@ class RobotWorker:
                 self._arm.stop()
                 self._posture.hold(self._arm.targets)
                 self._arm_active = False
+                self._arm_finishing = False
         walking = self._loco.moving
         if walking:
             # a biped mid-stride cannot freeze its joints: it finishes the step and puts its feet together
@@ -840,6 +875,8 @@ class RobotWorker:
                 return CommandReply(False, "a plan is running: cancel it first", Refusal.BUSY)
             if self._loco.moving:
                 return CommandReply(False, "the robot is walking: stop it first", Refusal.BUSY)
+            if self._arm_active:
+                return CommandReply(False, "the arm is still moving: try again in a moment", Refusal.BUSY)
             self._posture_name = posture
             goal = self._stand if posture == Posture.STAND else _crouch_targets()
             self._posture.move_to(goal)
@@ -889,6 +926,7 @@ class RobotWorker:
             self._held_object = None
             self._posture_name = Posture.STAND
             self._arm_active = False
+            self._arm_finishing = False
             self._stand = self._default_stand.copy()
         self._loco.walking.ik.set_upper_body(dict(zip(humanoid_v1.JOINT_NAMES, self._default_stand, strict=True)))
         self._loco.halt()
@@ -924,6 +962,8 @@ class RobotWorker:
                 fault=lambda j=job: j.fault,
             )
             result = self._executor.run(job.plan, context, lambda i, st, d, j=job: self._on_step(j, i, st, d))
+            with contextlib.suppress(Cancelled):  # a plan ends with the robot at rest, its arm included
+                self._wait_arm_finished(job.cancel)
             with self._lock:
                 job.status = replace(job.status, state=result)
                 self._current_job = None
@@ -1043,7 +1083,14 @@ class RobotWorker:
         if arm is not None and not fallen:  # reaching: feet planted, the estimate follows
             s = sensors(measured)
             self._loco.odometry.update(s.joint_positions, s.imu_quat, s.foot_forces)
-            return arm.update(measured.joint_positions)
+            targets = arm.update(measured.joint_positions)
+            with self._lock:
+                finished = self._arm_finishing and arm.done.is_set() and self._arm_active
+            if finished:
+                self._release_arm(None)
+                with self._lock:
+                    self._arm_finishing = False
+            return targets
         if fallen or not in_stance:
             if not fallen:  # crouching or moving between postures: the feet stay put, the estimate follows
                 s = sensors(measured)
@@ -1076,6 +1123,7 @@ class RobotWorker:
         if self._arm_active and self._arm is not None:
             self._arm.stop()
             self._arm_active = False
+            self._arm_finishing = False
         self._posture.hold(self._targets)  # hold the last references: no sudden move on the ground
         with self._lock:
             self._fallen = True

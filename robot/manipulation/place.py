@@ -53,8 +53,9 @@ class PlaceBody(Protocol):
 
     def arm(self, moves: list[Move]) -> None: ...
 
-    def stow_arm(self) -> None:
-        """Arm back down, gripper closed, standing."""
+    def stow_arm(self, finish_in_background: bool = False) -> None:
+        """Arm back down, gripper closed, standing. `finish_in_background`: return once the hand is clear of the
+        camera's view and let the arm finish on its own (the robot's next body step waits for it)."""
 
 
 @dataclass(frozen=True)
@@ -80,7 +81,7 @@ def place(name: str, height: float, spot: np.ndarray, facing_yaw: float, body: P
         corrections += 1
     moves, _ = place_moves(in_feet, height)
     body.arm(moves)
-    body.stow_arm()
+    body.stow_arm(finish_in_background=True)  # a spoken confirmation that follows need not wait for the arm
     seen = body.locate(name, near=spot)
     if seen is None:
         raise PlaceFailed(f"not found: the {name} is not where it was let go")

@@ -69,7 +69,7 @@ class FakeBody:
     def arm(self, moves: list[Move]) -> None:
         self.moves.extend(moves)
 
-    def stow_arm(self) -> None:
+    def stow_arm(self, finish_in_background: bool = False) -> None:
         self.stowed = True
 
 
