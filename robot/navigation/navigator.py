@@ -9,7 +9,7 @@ staging point by a short straight walk, where the margin no longer applies). Eve
 The path arrives lined up with the approach: it ends on the staging line (through the staging point, across the
 approach heading) right behind the approach pose, after a straight lead-in along that heading. Arriving sideways
 cost 6-8 s per approach, turning up to 90 deg and side-stepping 11 cm at the surface (turning in place runs at
-about 0.4 rad/s, side steps at 0.05 m/s); the lead-in makes that turn on the way, while walking.
+about 0.4-0.55 rad/s, side steps at 0.05 m/s); the lead-in makes that turn on the way, while walking.
 """
 
 from __future__ import annotations
@@ -51,7 +51,8 @@ CONTROL_PERIOD_S = 0.1
 # OPEN_BAND_M of its usual berth, at itself or on the next OPEN_AHEAD_M of the path, and more than
 # OPEN_MIN_REMAINING_M from the path's end (it slows down and stops as at the usual speed). At 0.2 m/s its feet swing
 # 7-8 cm off the path: in a gap beside a dropped box a foot caught the box (world seed 9), and a carrying robot fell
-# (seed 28), so doorways, gaps and a carrying robot keep to the follower's usual 0.15 m/s.
+# (seed 28), so doorways, gaps and a carrying robot keep to the follower's usual 0.15 m/s. (The gait tops out near
+# 0.16 m/s, see gait.MAX_STEP_FORWARD_M, so in the open the robot walks only a little faster.)
 OPEN_M_S = 0.2
 OPEN_BAND_M = 0.15
 OPEN_AHEAD_M = 0.6
@@ -92,6 +93,10 @@ LEAD_IN_MAX_DETOUR_M = 0.35
 # STEP_CLEAR_M away from the nearest mapped obstacle (looked for within STEP_CLEAR_SEARCH_M) and replans.
 TURN_STALL_S = 4.0
 TURN_STALL_RAD = math.radians(10.0)
+# A turn is watched whether in place or walking on while turning, if asked for at this rate or more (rad/s): with its
+# heading error at the follower's turn-in-place threshold a pressed robot is told to do each in turn, a few times a
+# second (world seed 22, carrying the mug: 20 s of that, the heading never nearer, then "stuck" 0.47 m from the table).
+TURN_STALL_MIN_RAD_S = 0.2
 STEP_CLEAR_M = 0.1
 STEP_CLEAR_M_S = 0.04
 STEP_CLEAR_SEARCH_M = 0.4
@@ -190,7 +195,7 @@ def _shortest_path_on(costmap: Costmap, start: tuple[float, float],
 
 @dataclass
 class _TurnWatch:
-    """Notices a turn in place that does not turn: the robot pressed against something (measured: 20 s of a -0.6
+    """Notices a turn that does not turn: the robot pressed against something (measured: 20 s of a -0.6
     rad/s command with the heading wobbling between 0.85 and 1.10 rad, an arm against the end of a wall), which no
     map shows, so nothing replans."""
 
@@ -201,7 +206,7 @@ class _TurnWatch:
     def stalled(self, command: FollowCommand, yaw: float, now: float) -> bool:
         """Only turning the commanded way counts: a robot pressed against a box is also turned back by it."""
         direction = math.copysign(1.0, command.yaw_rate)
-        if command.vx != 0.0 or command.yaw_rate == 0.0:
+        if abs(command.yaw_rate) < TURN_STALL_MIN_RAD_S:
             self.since = None
             return False
         if self.since is None or direction != self.direction:

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from robot.navigation.costmap import Costmap
-from robot.navigation.follower import MAX_FORWARD_M_S
+from robot.navigation.follower import MAX_FORWARD_M_S, TURN_IN_PLACE_RAD
 from robot.navigation.grid_planner import inflate
 from robot.navigation.navigator import (
     CONTROL_PERIOD_S,
@@ -207,6 +207,31 @@ def test_a_turn_that_only_wobbles_against_something_is_noticed_as_not_turning() 
     report = Navigator(body, lambda: body.t).go((-1.0, -0.5))  # behind it: it must turn round first
     assert report.final_error_m < 0.1
     assert body.t < STUCK_S  # it stepped clear instead of wobbling until it gave up as stuck
+
+
+class PinnedBody(MappedBody):
+    """Pinned where it stands by something no map shows, turned TURN_IN_PLACE_RAD off its way: any turn only rocks
+    it (+-0.1 rad), so the follower's heading error dithers about its threshold and it is told to turn in place and
+    to walk on turning by turns, a few times a second. Moving without turning frees it."""
+
+    def wait(self, seconds: float) -> None:
+        if self.velocity[2] == 0.0 or math.hypot(self.x, self.y) >= self.stuck_m:
+            super().wait(seconds)
+            return
+        self.t += seconds
+        self.yaw = TURN_IN_PLACE_RAD + 0.1 * math.sin(5.0 * self.t)
+        self.track.append((self.x, self.y, self.yaw))
+        self.commands.append(self.velocity)
+
+
+def test_a_pinned_robot_told_by_turns_to_turn_in_place_and_to_walk_on_turning_is_noticed_as_not_turning() -> None:
+    body = PinnedBody(_map_with((0.0, 0.2)), stuck_m=0.03)
+    body.yaw = TURN_IN_PLACE_RAD
+    report = Navigator(body, lambda: body.t).go((1.0, 0.0))
+    pinned = [vx for (x, y, _), (vx, _, _) in zip(body.track, body.commands, strict=True) if math.hypot(x, y) < 0.03]
+    assert 0 < sum(vx == 0.0 for vx in pinned) < len(pinned)  # both kinds of command while pinned
+    assert report.final_error_m < 0.1
+    assert body.t < STUCK_S  # it stepped clear instead of rocking until it gave up as stuck
 
 
 class BoxDroppedBody(MappedBody):
