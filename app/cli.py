@@ -1,4 +1,4 @@
-"""The `humanoid` command: serve, run, estop, db upgrade, bench."""
+"""The `humanoid` command: serve, run, plan, estop, db upgrade, bench."""
 
 from __future__ import annotations
 
@@ -46,6 +46,40 @@ def _run(args: argparse.Namespace, settings: Settings) -> int:
             print(f"  {step['action']}({', '.join(step['args'].values())}): {step['status']}{detail}")
         print(f"  sim {result['sim_time_s']:.2f} s, wall {result['wall_time_s']:.2f} s, fell: {result['fell']}")
     return 0 if result["success"] else 1
+
+
+def _plan(args: argparse.Namespace, settings: Settings) -> int:
+    """Plan a command against the world of a seed without moving anything: the validated plan, in the seed's
+    format (a JSON list of actions)."""
+    from robot.model.world import generate_world
+    from robot.planning.context import PlanningContext
+    from robot.planning.pipeline import build_pipeline
+    from robot.planning.planner import PlanningError
+    from robot.planning.world_context import WorldContext
+
+    if args.backend:
+        settings = settings.model_copy(update={"planner_backend": args.backend})
+    world = WorldContext.from_layout(generate_world(args.seed), held_object=args.holding)
+    if args.holding and world.resolve_object(args.holding) is None:
+        print(f"unknown object {args.holding!r}; known objects: {', '.join(world.objects)}", file=sys.stderr)
+        return 2
+    if args.holding:
+        world = WorldContext.from_layout(generate_world(args.seed), held_object=world.resolve_object(args.holding))
+    pipeline = build_pipeline(settings.planner_config())
+    try:
+        result = pipeline.plan(args.text, PlanningContext(world))
+    except PlanningError as exc:
+        print(f"no plan: {exc}", file=sys.stderr)
+        return 1
+    for note in result.notes:
+        print(f"note: {note}", file=sys.stderr)
+    if args.json:
+        print(json.dumps(result.plan.to_seed_list(), indent=2))
+    else:
+        print(f"plan by {result.planner} in {result.latency_s * 1000:.1f} ms:")
+        for i, step in enumerate(result.plan.steps, start=1):
+            print(f"  {i}. {step.action}({', '.join(f'{k}={v!r}' for k, v in step.args.items())})")
+    return 0
 
 
 def _estop(args: argparse.Namespace, settings: Settings) -> int:
@@ -102,6 +136,15 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--timeout", type=float, default=300.0, help="wall-clock limit in seconds")
     run.set_defaults(func=_run)
 
+    plan = sub.add_parser("plan", help="print the validated plan for a command, without moving the robot")
+    plan.add_argument("text", help='e.g. "bring the red mug to the living-room table"')
+    plan.add_argument("--backend", choices=["rules", "openai", "local"], default=None,
+                      help="planner backend (default: HUMANOID_PLANNER_BACKEND, else rules)")  # fmt: skip
+    plan.add_argument("--seed", type=int, default=0, help="world seed (which places and objects exist)")
+    plan.add_argument("--holding", default=None, help="plan as if the robot held this object")
+    plan.add_argument("--json", action="store_true", help="print the plan as a JSON list of actions")
+    plan.set_defaults(func=_plan)
+
     estop = sub.add_parser("estop", help="latch (or --release) the e-stop of a running server")
     estop.add_argument("--release", action="store_true")
     estop.add_argument("--url", default=None, help="server URL (default http://HOST:PORT)")
@@ -112,7 +155,7 @@ def build_parser() -> argparse.ArgumentParser:
     db_sub.add_parser("upgrade", help="apply pending migrations").set_defaults(func=_db)
 
     bench = sub.add_parser("bench", help="benchmarks, written as JSON")
-    bench.add_argument("suite", choices=["core", "walk", "perception", "capstone"])
+    bench.add_argument("suite", choices=["core", "walk", "perception", "capstone", "planner"])
     bench.add_argument("--json", action="store_true", help="print the JSON result")
     bench.add_argument("--output", default=None, help="also write the JSON result to this file")
     bench.add_argument("--presses", type=int, default=100, help="e-stop presses to time")
@@ -137,6 +180,11 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--jobs", type=int, default=1, help="capstone: runs at once (1 measures wall time fairly)")
     bench.add_argument("--views", type=int, default=6, help="perception: viewpoints per world")
     bench.add_argument("--tours", type=int, default=5, help="perception: mapping tours (one world each)")
+    bench.add_argument("--backends", default="rules",
+                       help="planner: backends to measure, comma-separated (rules, openai, local)")  # fmt: skip
+    bench.add_argument("--repeat", type=int, default=1, help="planner: times each command is planned")
+    bench.add_argument("--no-fallback", action="store_true",
+                       help="planner: judge an LLM backend alone (no rules fallback)")  # fmt: skip
     bench.set_defaults(func=_bench)
     return parser
 

@@ -19,7 +19,8 @@ def run_command(text: str, seed: int, settings: Settings, timeout_s: float = 300
     """Plan and execute `text` in a fresh simulation; returns the result the CLI prints."""
     upgrade_to_head(settings.database_url)
     engine = make_engine(settings.database_url)
-    worker = RobotWorker(generate_world(seed), realtime=False, control_hz=settings.control_hz)
+    worker = RobotWorker(generate_world(seed), realtime=False, control_hz=settings.control_hz,
+                         planning=settings.planner_config(), max_auto_replans=settings.max_auto_replans)  # fmt: skip
     recorder = SessionRecorder(make_session_factory(engine), worker, kind="run", seed=seed,
                                sample_hz=settings.state_sample_hz)  # fmt: skip
     started = time.perf_counter()
@@ -29,7 +30,12 @@ def run_command(text: str, seed: int, settings: Settings, timeout_s: float = 300
         reply = worker.submit(RunCommand(text))
         recorder.record_command(text, "cli", reply)
         finished = reply.accepted and worker.wait_for(
-            lambda s: s.plan is not None and s.plan.command_id == reply.command_id and s.plan.state != "running",
+            lambda s: (
+                s.plan is not None
+                and s.plan.command_id == reply.command_id
+                and s.plan.state != "running"
+                and not s.plan.replanning
+            ),
             timeout_s,
         )
         state = worker.state()

@@ -37,13 +37,21 @@ class Runtime:
         db = make_session_factory(engine)
         if worker is None:
             worker = (
-                WorkerProcess(settings.seed, control_hz=settings.control_hz, perception=settings.perception)
+                WorkerProcess(
+                    settings.seed,
+                    control_hz=settings.control_hz,
+                    perception=settings.perception,
+                    planning=settings.planner_config(),
+                    max_auto_replans=settings.max_auto_replans,
+                )
                 if settings.worker_process
                 else RobotWorker(
                     generate_world(settings.seed),
                     realtime=True,
                     control_hz=settings.control_hz,
                     perception=settings.perception,
+                    planning=settings.planner_config(),
+                    max_auto_replans=settings.max_auto_replans,
                 )
             )
         worker.start()

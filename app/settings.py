@@ -10,6 +10,8 @@ from typing import Literal
 from pydantic import AliasChoices, Field
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
+from robot.planning.pipeline import PlannerConfig
+
 REPO_ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -39,6 +41,37 @@ class Settings(BaseSettings):
     mirror_shadows: bool = Field(False, description="shadows in the 3D view (costly where WebGL runs in software)")
     worker_process: bool = Field(True, description="run the robot worker in its own process (keeps its loop on time)")
     perception: bool = Field(True, description="head camera, detection, lidar and map (about 25 % of one core)")
+
+    # planning: which planner turns commands into plans, and how the executor recovers
+    planner_backend: Literal["rules", "openai", "local"] = Field(
+        "rules", description="rules (built in, offline), openai (any OpenAI-compatible server) or local (a GGUF file)"
+    )
+    openai_base_url: str = Field("http://127.0.0.1:8080/v1", description="e.g. https://api.groq.com/openai/v1")
+    openai_api_key: str = Field("", validation_alias=AliasChoices("HUMANOID_OPENAI_API_KEY", "OPENAI_API_KEY"))
+    openai_model: str = "llama-3.3-70b-versatile"
+    openai_timeout_s: float = Field(20.0, gt=0, le=300)
+    openai_response_format: Literal["auto", "json_schema", "json_object", "none"] = Field(
+        "auto", description="how to ask for JSON: auto tries json_schema, then json_object (llama.cpp), then none"
+    )
+    local_model_path: str = Field("", description="GGUF model file for the local backend (pip install .[local-llm])")
+    local_threads: int | None = Field(None, ge=1, le=256)
+    planner_max_repairs: int = Field(1, ge=0, le=5, description="re-asks of an LLM whose plan is invalid")
+    planner_fallback: bool = Field(True, description="plan with rules when the LLM backend fails")
+    max_auto_replans: int = Field(2, ge=0, le=10, description="automatic replans of a command after failed steps")
+
+    def planner_config(self) -> PlannerConfig:
+        return PlannerConfig(
+            backend=self.planner_backend,
+            openai_base_url=self.openai_base_url,
+            openai_api_key=self.openai_api_key,
+            openai_model=self.openai_model,
+            openai_timeout_s=self.openai_timeout_s,
+            openai_response_format=self.openai_response_format,
+            local_model_path=self.local_model_path,
+            local_threads=self.local_threads,
+            max_repairs=self.planner_max_repairs,
+            fallback_to_rules=self.planner_fallback,
+        )
 
 
 @lru_cache

@@ -32,10 +32,19 @@ class Plan:
     def to_dict(self) -> dict[str, Any]:
         return {"steps": [s.to_dict() for s in self.steps]}
 
+    def to_seed_list(self) -> list[dict[str, str]]:
+        """As the seed's flat list of actions: `[{"action": "pick_object", "object": "red mug"}, ...]`."""
+        return [{"action": s.action, **s.args} for s in self.steps]
+
     @staticmethod
     def from_dict(data: dict[str, Any]) -> Plan:
-        """Build a plan from already schema-validated JSON."""
-        return Plan(tuple(Step(s["action"], dict(s.get("args", {}))) for s in data["steps"]))
+        """Build a plan from already schema-validated JSON (numbers among the arguments become text)."""
+        return Plan(
+            tuple(
+                Step(s["action"], {k: v if isinstance(v, str) else f"{v:g}" for k, v in s.get("args", {}).items()})
+                for s in data["steps"]
+            )
+        )
 
 
 class StepState(StrEnum):
@@ -75,6 +84,7 @@ class PlanStatus:
     revision: int
     state: PlanState
     steps: tuple[StepStatus, ...]
+    replanning: bool = False  # failed, and the executor is planning the command's next revision
 
 
 # ---------------------------------------------------------------------------------------------------------------

@@ -42,12 +42,14 @@ from robot.interface import (
     StopTeleop,
     Teleop,
 )
+from robot.planning.pipeline import PlannerConfig
 from robot.state_board import StateBoard
 
 log = logging.getLogger(__name__)
 
 STATE_PERIOD_S = 0.01  # state snapshots sent to the parent at up to 100 Hz
-REPLY_TIMEOUT_S = 30.0  # planning may take a while (an LLM); the e-stop never waits behind it
+# Planning may take a while (an LLM's timeout, then a repair, then the rules); the e-stop never waits behind it.
+REPLY_TIMEOUT_S = 90.0
 STARTUP_TIMEOUT_S = 180.0
 # Commands that must never queue behind a slow one: handled inline by the child's receiving thread.
 _IMMEDIATE = (EStop, ReleaseEStop, CancelPlan, Teleop, StopTeleop, SetPosture, ResetRobot, PlaceObstacle)
@@ -56,8 +58,18 @@ _IMMEDIATE = (EStop, ReleaseEStop, CancelPlan, Teleop, StopTeleop, SetPosture, R
 class WorkerProcess:
     """Parent-side proxy of a `RobotWorker` running in a child process."""
 
-    def __init__(self, seed: int, control_hz: float = 100.0, realtime: bool = True, perception: bool = True) -> None:
+    def __init__(
+        self,
+        seed: int,
+        control_hz: float = 100.0,
+        realtime: bool = True,
+        perception: bool = True,
+        planning: PlannerConfig | None = None,
+        max_auto_replans: int = 2,
+    ) -> None:
         self._seed = seed
+        self._planning = planning or PlannerConfig()
+        self._max_auto_replans = max_auto_replans
         self._perception = perception
         self._control_hz = control_hz
         self._realtime = realtime
@@ -81,7 +93,15 @@ class WorkerProcess:
         parent_conn, child_conn = context.Pipe(duplex=True)
         self._process = context.Process(
             target=child_main,
-            args=(child_conn, self._seed, self._control_hz, self._realtime, self._perception),
+            args=(
+                child_conn,
+                self._seed,
+                self._control_hz,
+                self._realtime,
+                self._perception,
+                self._planning,
+                self._max_auto_replans,
+            ),
             name="robot-worker",
             daemon=True,
         )
@@ -200,13 +220,22 @@ class WorkerProcess:
 # child process
 
 
-def child_main(conn: Connection, seed: int, control_hz: float, realtime: bool, perception: bool = True) -> None:
+def child_main(
+    conn: Connection,
+    seed: int,
+    control_hz: float,
+    realtime: bool,
+    perception: bool = True,
+    planning: PlannerConfig | None = None,
+    max_auto_replans: int = 2,
+) -> None:
     """Entry point of the worker process: build the robot, then serve commands until told to stop."""
     try:
         from robot.model.world import generate_world
         from robot.worker import RobotWorker
 
-        worker = RobotWorker(generate_world(seed), realtime=realtime, control_hz=control_hz, perception=perception)
+        worker = RobotWorker(generate_world(seed), realtime=realtime, control_hz=control_hz, perception=perception,
+                             planning=planning, max_auto_replans=max_auto_replans)  # fmt: skip
         subscription = worker.subscribe()
         description = worker.describe()
         if realtime:  # every thread started from here on inherits it; the control loop goes higher still

@@ -93,6 +93,7 @@ from robot.perception.geometry import matrix_to_quat_wxyz, yaw_of
 from robot.perception.search import ObjectNotFound, find_object
 from robot.perception.sensor_process import SensorError
 from robot.perception.service import PerceptionService
+from robot.planning.context import ConversationMemory, PlanningContext
 from robot.planning.executor import (
     Cancelled,
     Capability,
@@ -101,11 +102,12 @@ from robot.planning.executor import (
     StepFailed,
     default_capabilities,
 )
+from robot.planning.pipeline import PlannerConfig, PlanningPipeline, PlanResult, build_pipeline
 from robot.planning.planner import Planner, PlanningError
-from robot.planning.rules import RulesPlanner
-from robot.planning.validator import validate_plan, validate_plan_json
+from robot.planning.validator import validate_plan_json
 from robot.planning.world_context import WorldContext
 from robot.sim.backend import Measurements, MujocoSimBackend
+from robot.simple_actions import SimpleActions
 from robot.state_board import StateBoard
 from robot.task_bodies import ArmBody, NavBodyOfWorker, TaskBody, carry_back_away_m
 
@@ -118,6 +120,16 @@ TELEOP_TIMEOUT_S = 0.3
 
 def _step_summary(steps: tuple[StepStatus, ...]) -> list[dict[str, str]]:
     return [{"action": s.action, "state": s.state.value, "detail": s.detail} for s in steps]
+
+
+def _failure_of(job: _Job) -> tuple[str | None, tuple[str, ...]]:
+    """A failed plan's first failed step and reason, and the steps done before it, for a replanner."""
+    steps = job.status.steps
+    failed = next((s for s in steps if s.state == StepState.FAILED), None)
+    if failed is None:
+        return None, ()
+    done = tuple(f"{s.action}({', '.join(s.args.values())})" for s in steps if s.state == StepState.SUCCEEDED)
+    return f"step {failed.index + 1} {failed.action} failed: {failed.detail}", done
 
 
 @dataclass
@@ -140,6 +152,8 @@ class RobotWorker:
         layout: WorldLayout,
         backend: MujocoSimBackend | None = None,
         planner: Planner | None = None,
+        planning: PlanningPipeline | PlannerConfig | None = None,
+        max_auto_replans: int = 2,
         capabilities: dict[str, Capability] | None = None,
         realtime: bool = True,
         control_hz: float = 100.0,
@@ -148,11 +162,17 @@ class RobotWorker:
     ) -> None:
         self.layout = layout
         self.backend = backend or MujocoSimBackend(layout)
-        self.planner = planner or RulesPlanner()
+        if isinstance(planning, PlannerConfig) or planning is None:
+            planning = build_pipeline(planning or PlannerConfig())
+        if planner is not None:  # a given planner plans alone (tests)
+            planning = PlanningPipeline(planner, planner.name, fallback=None)
+        self.planning = planning
+        self.max_auto_replans = max_auto_replans
+        self._memory = ConversationMemory()
+        self._auto_replans: dict[int, int] = {}  # command id -> automatic replans so far
         self.realtime = realtime
         self.control_hz = control_hz
         self.dt = 1.0 / control_hz
-        self._executor = PlanExecutor(capabilities or self._capabilities())
         self._bus = EventBus(sim_clock=lambda: self._sim_time)
         self._stats = LoopStats(control_hz)
         self._model_dir: str | None = None
@@ -199,6 +219,7 @@ class RobotWorker:
         self._perception = (
             PerceptionService(layout, self._board_latest, self._bus.publish, realtime) if perception else None
         )
+        self._executor = PlanExecutor(capabilities or self._capabilities())
 
         self._jobs: queue.Queue[_Job | None] = queue.Queue()
         self._wake = threading.Event()
@@ -312,7 +333,21 @@ class RobotWorker:
         capabilities["navigate_to"] = self._navigate_to
         capabilities["pick_object"] = self._pick_object
         capabilities["place_object"] = self._place_object
-        for action in ("detect_object", "navigate_to", "pick_object", "place_object"):
+        simple = SimpleActions(
+            navigate=self._navigate_to,
+            search_body=lambda ctx: TaskBody(self, ctx),
+            robot_at_rest=lambda: not self._loco.moving and not self._arm_active,
+            known_objects=lambda: self._perception.memory.snapshot() if self._perception is not None else (),
+            robot_position=lambda: tuple(self._map_trunk()[0][:2]),
+            home=self.layout.robot_start,
+            has_camera=self._perception is not None,
+        )
+        capabilities["wait"] = simple.wait
+        capabilities["stop"] = simple.stop
+        capabilities["go_home"] = simple.go_home
+        capabilities["look_around"] = simple.look_around
+        capabilities["describe_scene"] = simple.describe_scene
+        for action in ("detect_object", "navigate_to", "pick_object", "place_object", "go_home", "look_around"):
             capabilities[action] = self._after_arm_finished(capabilities[action])
         return capabilities
 
@@ -711,6 +746,24 @@ class RobotWorker:
         known = self._perception.memory.snapshot() if self._perception is not None else ()
         return WorldContext.from_layout(self.layout, held_object=self._held_object, known_objects=known)
 
+    def _planning_context(self, failure: str | None = None, done: tuple[str, ...] = ()) -> PlanningContext:
+        return PlanningContext(self._world_context(), self._memory.turns(), failure, done)
+
+    def _plan(self, text: str, context: PlanningContext) -> PlanResult | CommandReply:
+        """Plan `text` with the configured planner (falling back to rules); a refusal when no plan could be made."""
+        try:
+            result = self.planning.plan(text, context)
+        except PlanningError as exc:
+            self._bus.publish("plan/rejected", f"could not plan {text!r}: {exc}", Level.WARN, text=text,
+                              backend=self.planning.backend)  # fmt: skip
+            return CommandReply(False, str(exc), Refusal.INVALID, (str(exc),))
+        if result.notes:
+            kind = "plan/fallback" if result.planner != result.backend else "plan/repaired"
+            message = f"{result.planner} planned {text!r}: " + "; ".join(result.notes)
+            self._bus.publish(kind, message, Level.WARN, text=text, planner=result.planner, backend=result.backend,
+                              notes=list(result.notes))  # fmt: skip
+        return result
+
     def _run_command(self, command: RunCommand) -> CommandReply:
         text = command.text.strip()
         if not text:
@@ -722,16 +775,12 @@ class RobotWorker:
         with self._lock:
             if refusal := self._refuse_if_unsafe() or self._refuse_if_teleop():
                 return refusal
-        try:
-            plan = self.planner.plan(text, self._world_context())
-        except PlanningError as exc:
-            self._bus.publish("plan/rejected", f"could not plan {text!r}: {exc}", Level.WARN, text=text)
-            return CommandReply(False, str(exc), Refusal.INVALID, (str(exc),))
-        checked, errors = validate_plan(plan, self._world_context())
-        if checked is None:
-            self._bus.publish("plan/rejected", f"invalid plan for {text!r}", Level.WARN, text=text, errors=errors)
-            return CommandReply(False, "the planner produced an invalid plan", Refusal.INVALID, tuple(errors))
-        return self._enqueue(text, checked, new_command=True)
+        result = self._plan(text, self._planning_context())
+        if isinstance(result, CommandReply):
+            self._memory.add(text)
+            self._memory.update_last(outcome=f"refused: {result.message}")
+            return result
+        return self._enqueue(text, result.plan, new_command=True, planned=result)
 
     def _execute_plan(self, command: ExecutePlan) -> CommandReply:
         with self._lock:
@@ -743,23 +792,52 @@ class RobotWorker:
         return self._enqueue(command.text or "(operator plan)", checked, new_command=True)
 
     def _replan(self) -> CommandReply:
+        """The operator's replan: the current command planned again from the robot's state now."""
         with self._lock:
             if refusal := self._refuse_if_unsafe() or self._refuse_if_teleop():
                 return refusal
             last = self._last_command
+            job = self._current_job or self._finished_job
         if last is None:
             return CommandReply(False, "no command to replan", Refusal.NOTHING_TO_REPLAN)
         command_id, text = last
-        try:
-            plan = self.planner.plan(text, self._world_context())
-        except PlanningError as exc:
-            return CommandReply(False, str(exc), Refusal.INVALID, (str(exc),))
-        checked, errors = validate_plan(plan, self._world_context())
-        if checked is None:
-            return CommandReply(False, "the planner produced an invalid plan", Refusal.INVALID, tuple(errors))
-        return self._enqueue(text, checked, new_command=False, command_id=command_id)
+        failure, done = _failure_of(job) if job is not None and job.status.command_id == command_id else (None, ())
+        result = self._plan(text, self._planning_context(failure, done))
+        if isinstance(result, CommandReply):
+            return result
+        return self._enqueue(text, result.plan, new_command=False, command_id=command_id, planned=result)
 
-    def _enqueue(self, text: str, plan: Plan, new_command: bool, command_id: int | None = None) -> CommandReply:
+    def _auto_replan(self, job: _Job) -> bool:
+        """After a failed step: plan the command again from where the robot is, up to `max_auto_replans` times per
+        command. Not after a fall or an e-stop (the robot must be seen to first), nor for an operator's plan."""
+        command_id = job.status.command_id
+        with self._lock:
+            if self._fallen or self._estop_latched or self._stop.is_set() or job.fault is not None:
+                return False
+            if self._last_command != (command_id, job.status.command_text) or not self._jobs.empty():
+                return False  # a newer command has come in
+            used = self._auto_replans.get(command_id, 0)
+            if used >= self.max_auto_replans or job.status.command_text == "(operator plan)":
+                return False
+            self._auto_replans[command_id] = used + 1
+        failure, done = _failure_of(job)
+        result = self._plan(job.status.command_text, self._planning_context(failure, done))
+        if isinstance(result, CommandReply):
+            return False
+        self._bus.publish("plan/replanning", f"replanning after: {failure} (automatic replan {used + 1} of "
+                          f"{self.max_auto_replans})", Level.WARN, command_id=command_id, failure=failure)  # fmt: skip
+        reply = self._enqueue(job.status.command_text, result.plan, new_command=False, command_id=command_id,
+                              planned=result)  # fmt: skip
+        return reply.accepted
+
+    def _enqueue(
+        self,
+        text: str,
+        plan: Plan,
+        new_command: bool,
+        command_id: int | None = None,
+        planned: PlanResult | None = None,
+    ) -> CommandReply:
         with self._lock:
             # an e-stop (or teleop) may have come in while planning
             if refusal := self._refuse_if_unsafe() or self._refuse_if_teleop():
@@ -768,6 +846,8 @@ class RobotWorker:
                 command_id = self._next_command_id
                 self._next_command_id += 1
                 self._bus.publish("command/received", f"command: {text}", command_id=command_id, text=text)
+                self._memory.add(text)
+            self._memory.update_last(plan=plan, outcome="running")
             assert command_id is not None
             revision = self._revisions.get(command_id, 0) + 1
             self._revisions[command_id] = revision
@@ -793,9 +873,14 @@ class RobotWorker:
                 revision=revision,
                 text=text,
                 plan=plan.to_dict(),
+                planner=planned.planner if planned else "operator",
+                backend=planned.backend if planned else self.planning.backend,
+                notes=list(planned.notes) if planned else [],
+                planning_ms=round(planned.latency_s * 1000, 1) if planned else 0.0,
             )
             self._jobs.put(_Job(status, plan, threading.Event()))
-        return CommandReply(True, f"plan {plan_id} queued", command_id=command_id, plan=plan)
+        how = f" (planned by {planned.planner}: {'; '.join(planned.notes)})" if planned and planned.notes else ""
+        return CommandReply(True, f"plan {plan_id} queued{how}", command_id=command_id, plan=plan)
 
     def _cancel_plan(self, reason: str) -> CommandReply:
         with self._lock:
@@ -964,10 +1049,15 @@ class RobotWorker:
             result = self._executor.run(job.plan, context, lambda i, st, d, j=job: self._on_step(j, i, st, d))
             with contextlib.suppress(Cancelled):  # a plan ends with the robot at rest, its arm included
                 self._wait_arm_finished(job.cancel)
+            failure, _ = _failure_of(job)
             with self._lock:
-                job.status = replace(job.status, state=result)
+                # the state says a replan is coming, so nobody waiting for the command's end stops here
+                replans_left = self._auto_replans.get(job.status.command_id, 0) < self.max_auto_replans
+                job.status = replace(job.status, state=result, replanning=result == PlanState.FAILED and replans_left)
                 self._current_job = None
                 self._finished_job = job
+            if self._last_command is not None and self._last_command[0] == job.status.command_id:
+                self._memory.update_last(outcome=result.value + (f": {failure}" if failure else ""))
             level = Level.OK if result == PlanState.SUCCEEDED else Level.WARN
             failed = [s for s in job.status.steps if s.state == StepState.FAILED]
             message = f"plan {job.status.plan_id} {result.value}" + (f": {failed[0].detail}" if failed else "")
@@ -975,6 +1065,9 @@ class RobotWorker:
                 "plan/finished", message, level, plan_id=job.status.plan_id, state=result.value,
                 steps=_step_summary(job.status.steps),
             )  # fmt: skip
+            if job.status.replanning and not self._auto_replan(job):
+                with self._lock:
+                    job.status = replace(job.status, replanning=False)
 
     def _on_step(self, job: _Job, index: int, state: StepState, detail: str) -> None:
         now = self._sim_time

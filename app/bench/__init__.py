@@ -33,6 +33,16 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
             print(f"unknown capstone task(s) {unknown or args.tasks!r}: choose from {choices}", file=sys.stderr)
             return 2
         result = run_capstone(seeds=args.seeds or 30, seed=args.seed or 0, tasks=tasks, jobs=args.jobs)
+    elif suite == "planner":
+        from app.bench.planner import parse_backends, run_planner
+        from app.settings import get_settings
+
+        try:
+            backends = parse_backends(args.backends)
+        except ValueError as exc:
+            print(exc, file=sys.stderr)
+            return 2
+        result = run_planner(get_settings(), backends, repeat=args.repeat, no_fallback=args.no_fallback)
     else:  # pragma: no cover - argparse restricts the choices
         raise SystemExit(f"unknown suite {suite}")
     text = json.dumps(result, indent=2)

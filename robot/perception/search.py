@@ -1,4 +1,5 @@
-"""`detect_object`: look for a known object, with the head first and then by turning the body.
+"""`detect_object`: look for a known object, with the head first and then by turning the body; `look_around`:
+look everywhere once, for whatever is there.
 
 The search first looks where the object is believed to be (world memory, or the place the world says it is on),
 then sweeps the head left and right at two tilts, then turns the body and sweeps again, until the object has
@@ -89,3 +90,41 @@ def find_object(name: str, body: SearchBody, believed_at: tuple[float, float, fl
         f"{name} not found: looked in {views} directions"
         + (f" and turned {math.degrees(turned):.0f} deg" if turned else "")
     )
+
+
+@dataclass(frozen=True)
+class LookResult:
+    seen: dict[str, DetectedObject]  # label -> its nearest confident detection
+    views: int
+    turned_rad: float
+
+
+def look_around(body: SearchBody, check_cancelled: Callable[[], None]) -> LookResult:
+    """Sweep the head at every body heading of a full turn (ending facing the way it started) and collect every
+    confident detection. The world memory takes in what the frames show as they arrive; this says what was seen."""
+    seen: dict[str, DetectedObject] = {}
+    views = 0
+    turned = 0.0
+    turns = (0.0, *BODY_TURNS)
+    for turn in turns:
+        if turn:
+            check_cancelled()
+            body.turn_in_place(turn)
+            turned += turn
+        for pan, tilt in SWEEP:
+            check_cancelled()
+            body.point_head(pan, tilt)
+            views += 1
+            for _ in range(FRAMES_PER_VIEW):
+                for detection in body.fresh_detections():
+                    known = seen.get(detection.label)
+                    if detection.confidence >= MIN_CONFIDENCE and (
+                        known is None or detection.distance_m < known.distance_m
+                    ):
+                        seen[detection.label] = detection
+    back = math.tau - turned  # the rest of the full turn: face the way the robot started
+    if back > 1e-3:
+        check_cancelled()
+        body.turn_in_place(math.remainder(back, math.tau))
+    body.point_head(0.0, SWEEP[0][1])
+    return LookResult(seen, views, turned)

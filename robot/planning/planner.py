@@ -1,11 +1,13 @@
-"""The planner interface: text and world context in, a plan out (validated by the caller)."""
+"""The planner interface: text and context in, a plan out (validated by the caller)."""
 
 from __future__ import annotations
 
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 from robot.interface import Plan
-from robot.planning.world_context import WorldContext
+
+if TYPE_CHECKING:
+    from robot.planning.context import PlanningContext
 
 
 class PlanningError(Exception):
@@ -15,4 +17,4 @@ class PlanningError(Exception):
 class Planner(Protocol):
     name: str
 
-    def plan(self, text: str, world: WorldContext) -> Plan: ...
+    def plan(self, text: str, context: PlanningContext) -> Plan: ...

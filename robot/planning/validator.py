@@ -2,16 +2,18 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
-from robot.interface import Plan
+from robot.interface import Plan, Step
 from robot.navigation.goal import parse_pose_goal
-from robot.planning.schema import schema_errors
+from robot.planning.schema import MAX_WAIT_S, canonical_plan_json, schema_errors
 from robot.planning.world_context import WorldContext
 
 
 def validate_plan_json(plan_json: Any, world: WorldContext) -> tuple[Plan | None, list[str]]:
-    """Returns (plan with canonical names, []) when valid, else (None, errors)."""
+    """Returns (plan with canonical names, []) when valid, else (None, errors). Takes our shape or the seed's."""
+    plan_json = canonical_plan_json(plan_json)
     errors = schema_errors(plan_json)
     if errors:
         return None, errors
@@ -19,7 +21,8 @@ def validate_plan_json(plan_json: Any, world: WorldContext) -> tuple[Plan | None
 
 
 def validate_plan(plan: Plan, world: WorldContext) -> tuple[Plan | None, list[str]]:
-    """Semantic checks: known places and objects, and an order that can work (pick before place)."""
+    """Semantic checks: known places and objects, sensible numbers, and an order that can work (pick before
+    place, one object in hand at a time)."""
     errors: list[str] = []
     held = world.held_object
     canonical_steps = []
@@ -27,7 +30,14 @@ def validate_plan(plan: Plan, world: WorldContext) -> tuple[Plan | None, list[st
         args = dict(step.args)
         if step.action == "navigate_to":
             target = args["target"]
-            resolved = world.resolve_place(target) or world.resolve_object(target)
+            resolved = world.resolve_place(target)
+            thing = world.resolve_object(target) if resolved is None else None
+            if thing is not None:  # "go to the mug": where the mug is believed to be
+                resolved = world.object_locations.get(thing)
+                if resolved is None:
+                    errors.append(f"step {i}: where the {thing} is is not known: look for it first")
+                    canonical_steps.append(step)
+                    continue
             pose = parse_pose_goal(target) if resolved is None else None
             if pose is not None:
                 args["target"] = pose.text()
@@ -55,7 +65,22 @@ def validate_plan(plan: Plan, world: WorldContext) -> tuple[Plan | None, list[st
             if held is None:
                 errors.append(f"step {i}: place_object before any pick_object: the robot holds nothing")
             held = None
-        canonical_steps.append(type(step)(step.action, args))
+        elif step.action == "wait":
+            seconds = _seconds(args["seconds"])
+            if seconds is None or not 0.0 < seconds <= MAX_WAIT_S:
+                errors.append(f"step {i}: wait needs a number of seconds above 0 and at most {MAX_WAIT_S:g}, "
+                              f"not {args['seconds']!r}")  # fmt: skip
+            else:
+                args["seconds"] = f"{seconds:g}"
+        canonical_steps.append(Step(step.action, args))
     if errors:
         return None, errors
     return Plan(tuple(canonical_steps)), []
+
+
+def _seconds(text: str) -> float | None:
+    try:
+        value = float(text.strip().removesuffix("s").strip())
+    except ValueError:
+        return None
+    return value if math.isfinite(value) else None

@@ -3,6 +3,7 @@ from __future__ import annotations
 import pytest
 
 from robot.interface import Plan, Step
+from robot.planning.context import PlanningContext
 from robot.planning.planner import PlanningError
 from robot.planning.rules import RulesPlanner
 from robot.planning.validator import validate_plan, validate_plan_json
@@ -36,14 +37,14 @@ FETCH_MUG = [
     ],
 )
 def test_paraphrases_of_the_capstone_give_the_same_fetch(world, text: str) -> None:
-    plan = RulesPlanner().plan(text, world)
+    plan = RulesPlanner().plan(text, PlanningContext(world))
     assert actions(plan)[:3] == FETCH_MUG
     assert plan.steps[-1].action == "say"
     assert validate_plan(plan, world)[1] == []
 
 
 def test_bring_to_a_place_picks_then_places(world) -> None:
-    plan = RulesPlanner().plan("bring the red mug to the living-room table", world)
+    plan = RulesPlanner().plan("bring the red mug to the living-room table", PlanningContext(world))
     assert actions(plan)[:5] == [
         *FETCH_MUG,
         ("navigate_to", "living-room table"),
@@ -63,7 +64,7 @@ def test_bring_to_a_place_picks_then_places(world) -> None:
     ],
 )
 def test_other_intents(world, text: str, expected: list[tuple[str, str]]) -> None:
-    assert actions(RulesPlanner().plan(text, world))[: len(expected)] == expected
+    assert actions(RulesPlanner().plan(text, PlanningContext(world)))[: len(expected)] == expected
 
 
 @pytest.mark.parametrize(
@@ -77,12 +78,12 @@ def test_other_intents(world, text: str, expected: list[tuple[str, str]]) -> Non
 )
 def test_unknown_names_and_intents_are_errors_not_guesses(world, text: str, message: str) -> None:
     with pytest.raises(PlanningError, match=message):
-        RulesPlanner().plan(text, world)
+        RulesPlanner().plan(text, PlanningContext(world))
 
 
 def test_holding_the_object_skips_the_fetch(layout) -> None:
     world = WorldContext.from_layout(layout, held_object="red mug")
-    plan = RulesPlanner().plan("bring the red mug to the table", world)
+    plan = RulesPlanner().plan("bring the red mug to the table", PlanningContext(world))
     assert actions(plan)[0] == ("navigate_to", "living-room table")
 
 
@@ -90,7 +91,7 @@ def test_validator_rejects_unknown_action_with_a_clear_reason(world) -> None:
     plan, errors = validate_plan_json({"steps": [{"action": "fly_to", "args": {"target": "moon"}}]}, world)
     assert plan is None
     assert errors == ["step 1: unknown action 'fly_to' (known: navigate_to, detect_object, pick_object, "
-                      "place_object, say)"]  # fmt: skip
+                      "place_object, say, look_around, describe_scene, go_home, wait, stop)"]  # fmt: skip
 
 
 @pytest.mark.parametrize(
@@ -101,7 +102,8 @@ def test_validator_rejects_unknown_action_with_a_clear_reason(world) -> None:
         ({"steps": [{"action": "say", "args": {}}]}, "takes exactly one string argument 'text'"),
         ({"steps": [{"action": "say", "args": {"text": 3}}]}, "takes exactly one string argument"),
         ({"steps": [{"action": "say", "args": {"text": "x"}}], "extra": 1}, "Additional properties"),
-        ([1, 2], "is not of type 'object'"),
+        ([1, 2], "steps/0"),
+        ("not a plan", "is not of type 'object'"),
     ],
 )
 def test_validator_rejects_malformed_plans(world, plan_json, fragment: str) -> None:

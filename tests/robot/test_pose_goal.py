@@ -6,6 +6,7 @@ import pytest
 
 from robot.model.world import generate_world
 from robot.navigation.goal import PoseGoal, parse_pose_goal
+from robot.planning.context import PlanningContext
 from robot.planning.rules import RulesPlanner
 from robot.planning.validator import validate_plan_json
 from robot.planning.world_context import WorldContext
@@ -33,7 +34,7 @@ def test_what_is_not_a_pose_is_not_taken_for_one(text: str) -> None:
 
 def test_go_to_a_pose_plans_a_walk_there_and_the_validator_keeps_it_canonical() -> None:
     world = WorldContext.from_layout(generate_world(0))
-    plan = RulesPlanner().plan("walk to (0.5, -0.25, 90 deg)", world)
+    plan = RulesPlanner().plan("walk to (0.5, -0.25, 90 deg)", PlanningContext(world))
     assert plan.steps[0].action == "navigate_to" and plan.steps[0].args["target"] == "0.50, -0.25, 90 deg"
     checked, errors = validate_plan_json({"steps": [{"action": "navigate_to", "args": {"target": "1.2 0.5"}}]}, world)
     assert errors == [] and checked.steps[0].args["target"] == "1.20, 0.50"

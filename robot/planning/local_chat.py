@@ -1,0 +1,52 @@
+"""A chat model run in this process by llama-cpp-python from a GGUF file, for robots with no network.
+
+An optional extra (`pip install .[local-llm]`): it compiles llama.cpp on install (about 5 minutes here). Output is
+constrained by a grammar built from the plan's JSON schema, so a small model still answers in the right shape.
+"""
+
+from __future__ import annotations
+
+import threading
+from pathlib import Path
+from typing import Any
+
+from robot.planning.planner import PlanningError
+from robot.planning.prompt import Message
+
+
+class LocalChat:
+    name = "local"
+
+    def __init__(self, model_path: str, n_ctx: int = 4096, n_threads: int | None = None, max_tokens: int = 512):
+        path = Path(model_path).expanduser()
+        if not model_path or not path.is_file():
+            raise PlanningError(f"local model file not found: {model_path!r} (set HUMANOID_LOCAL_MODEL_PATH to a GGUF)")
+        try:
+            import llama_cpp
+        except ImportError as exc:
+            raise PlanningError(
+                "the local backend needs llama-cpp-python: pip install '.[local-llm]' (it builds llama.cpp)"
+            ) from exc
+        self.model_path = path
+        self.max_tokens = max_tokens
+        self._llama = llama_cpp.Llama(model_path=str(path), n_ctx=n_ctx, n_threads=n_threads, verbose=False)
+        self._lock = threading.Lock()  # one generation at a time: the model holds one context
+
+    def describe(self) -> str:
+        return f"{self.model_path.name} in-process (llama.cpp)"
+
+    def chat(self, messages: list[Message], schema: dict[str, Any]) -> str:
+        with self._lock:
+            try:
+                response = self._llama.create_chat_completion(
+                    messages=messages,  # type: ignore[arg-type]
+                    response_format={"type": "json_object", "schema": schema},
+                    temperature=0.0,
+                    max_tokens=self.max_tokens,
+                )
+            except Exception as exc:  # llama.cpp reports context overflow and the like as plain exceptions
+                raise PlanningError(f"the local model failed: {exc}") from exc
+        content = response["choices"][0]["message"].get("content")  # type: ignore[index]
+        if not content:
+            raise PlanningError("the local model returned an empty message")
+        return content

@@ -1,0 +1,142 @@
+"""The OpenAI-compatible client's side of the protocol, against a small HTTP server on loopback that answers as
+servers do when they refuse a response format, fail, or hang: what is sent, and how each failure reads."""
+
+from __future__ import annotations
+
+import json
+import threading
+import time
+from collections.abc import Callable, Iterator
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from typing import Any
+
+import pytest
+
+from robot.planning.openai_chat import OpenAIChat
+from robot.planning.planner import PlanningError
+from robot.planning.schema import flat_plan_schema
+
+PLAN = {"steps": [{"action": "say", "text": "hello"}]}
+Responder = Callable[[dict[str, Any]], tuple[int, dict[str, Any]]]
+
+
+def completion(content: str) -> dict[str, Any]:
+    return {
+        "id": "x", "object": "chat.completion", "created": 0, "model": "m",
+        "choices": [{"index": 0, "finish_reason": "stop", "message": {"role": "assistant", "content": content}}],
+    }  # fmt: skip
+
+
+class Server:
+    def __init__(self) -> None:
+        self.requests: list[dict[str, Any]] = []
+        self.respond: Responder = lambda body: (200, completion(json.dumps(PLAN)))
+        outer = self
+
+        class Handler(BaseHTTPRequestHandler):
+            def do_POST(self) -> None:
+                body = json.loads(self.rfile.read(int(self.headers["Content-Length"])))
+                body["_path"] = self.path
+                body["_auth"] = self.headers.get("Authorization")
+                outer.requests.append(body)
+                status, answer = outer.respond(body)
+                data = json.dumps(answer).encode()
+                self.send_response(status)
+                self.send_header("Content-Type", "application/json")
+                self.send_header("Content-Length", str(len(data)))
+                self.end_headers()
+                self.wfile.write(data)
+
+            def log_message(self, *args: Any) -> None:
+                pass
+
+        self.httpd = ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+        self.url = f"http://127.0.0.1:{self.httpd.server_address[1]}/v1"
+        threading.Thread(target=self.httpd.serve_forever, daemon=True).start()
+
+    def close(self) -> None:
+        self.httpd.shutdown()
+        self.httpd.server_close()
+
+
+@pytest.fixture
+def server() -> Iterator[Server]:
+    s = Server()
+    yield s
+    s.close()
+
+
+MESSAGES = [{"role": "system", "content": "plan"}, {"role": "user", "content": "say hello"}]
+
+
+def test_a_request_carries_the_model_the_messages_the_key_and_the_schema(server: Server) -> None:
+    chat = OpenAIChat(server.url, "llama-3.3-70b-versatile", api_key="sk-test", response_format="json_schema")
+    assert json.loads(chat.chat(MESSAGES, flat_plan_schema())) == PLAN
+    sent = server.requests[0]
+    assert sent["_path"] == "/v1/chat/completions"
+    assert sent["_auth"] == "Bearer sk-test"
+    assert sent["model"] == "llama-3.3-70b-versatile" and sent["messages"] == MESSAGES
+    assert sent["temperature"] == 0.0
+    assert sent["response_format"]["type"] == "json_schema"
+    assert sent["response_format"]["json_schema"]["schema"] == flat_plan_schema()
+
+
+def test_auto_steps_down_to_json_object_on_a_server_that_refuses_json_schema_and_remembers(server: Server) -> None:
+    def respond(body: dict[str, Any]) -> tuple[int, dict[str, Any]]:
+        if body.get("response_format", {}).get("type") == "json_schema":
+            return 400, {"error": {"message": "response_format type json_schema is not supported"}}
+        return 200, completion(json.dumps(PLAN))
+
+    server.respond = respond
+    chat = OpenAIChat(server.url, "m")
+    chat.chat(MESSAGES, flat_plan_schema())
+    assert [r["response_format"]["type"] for r in server.requests] == ["json_schema", "json_object"]
+    assert server.requests[1]["response_format"]["schema"] == flat_plan_schema()
+    assert chat.response_format == "json_object"
+    chat.chat(MESSAGES, flat_plan_schema())
+    assert len(server.requests) == 3 and server.requests[2]["response_format"]["type"] == "json_object"
+
+
+def test_a_server_that_refuses_every_format_is_asked_without_one(server: Server) -> None:
+    def respond(body: dict[str, Any]) -> tuple[int, dict[str, Any]]:
+        if "response_format" in body:
+            return 400, {"error": {"message": "unsupported response_format"}}
+        return 200, completion(json.dumps(PLAN))
+
+    server.respond = respond
+    chat = OpenAIChat(server.url, "m")
+    chat.chat(MESSAGES, flat_plan_schema())
+    assert chat.response_format == "none"
+    assert "response_format" not in server.requests[-1]
+
+
+@pytest.mark.parametrize(
+    ("status", "body", "reason"),
+    [
+        (500, {"error": {"message": "model crashed"}}, "answered HTTP 500: model crashed"),
+        (401, {"error": {"message": "Invalid API Key"}}, "answered HTTP 401: Invalid API Key"),
+        (429, {"error": {"message": "Rate limit reached"}}, "answered HTTP 429: Rate limit reached"),
+        (200, completion(""), "returned an empty message"),
+    ],
+)
+def test_server_failures_are_planning_errors_with_the_reason(server: Server, status, body, reason) -> None:
+    server.respond = lambda _: (status, body)
+    with pytest.raises(PlanningError, match=reason):
+        OpenAIChat(server.url, "m", response_format="json_schema").chat(MESSAGES, flat_plan_schema())
+
+
+def test_a_server_that_hangs_times_out(server: Server) -> None:
+    def respond(body: dict[str, Any]) -> tuple[int, dict[str, Any]]:
+        time.sleep(1.5)
+        return 200, completion(json.dumps(PLAN))
+
+    server.respond = respond
+    started = time.monotonic()
+    with pytest.raises(PlanningError, match="timed out after 0.3 s"):
+        OpenAIChat(server.url, "m", timeout_s=0.3, response_format="json_object").chat(MESSAGES, flat_plan_schema())
+    assert time.monotonic() - started < 1.4
+
+
+def test_no_server_at_all_says_it_cannot_be_reached() -> None:
+    with pytest.raises(PlanningError, match=r"cannot reach http://127.0.0.1:9/v1"):
+        OpenAIChat("http://127.0.0.1:9/v1", "m", timeout_s=2).chat(MESSAGES, flat_plan_schema())
