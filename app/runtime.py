@@ -43,6 +43,7 @@ class Runtime:
                     perception=settings.perception,
                     planning=settings.planner_config(),
                     max_auto_replans=settings.max_auto_replans,
+                    approve_plans=settings.approve_plans,
                 )
                 if settings.worker_process
                 else RobotWorker(
@@ -52,6 +53,7 @@ class Runtime:
                     perception=settings.perception,
                     planning=settings.planner_config(),
                     max_auto_replans=settings.max_auto_replans,
+                    approve_plans=settings.approve_plans,
                 )
             )
         worker.start()

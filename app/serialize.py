@@ -30,6 +30,7 @@ def state_json(state: RobotState, include_qpos: bool = False) -> dict[str, Any]:
         "perception": dataclasses.asdict(state.perception) if state.perception is not None else None,
         "proprioception": dataclasses.asdict(state.proprioception) if state.proprioception is not None else None,
         "navigation": dataclasses.asdict(state.navigation) if state.navigation is not None else None,
+        "approval_required": state.approval_required,
     }
     if include_qpos:
         out["qpos"] = list(state.qpos)

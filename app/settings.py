@@ -58,6 +58,7 @@ class Settings(BaseSettings):
     planner_max_repairs: int = Field(1, ge=0, le=5, description="re-asks of an LLM whose plan is invalid")
     planner_fallback: bool = Field(True, description="plan with rules when the LLM backend fails")
     max_auto_replans: int = Field(2, ge=0, le=10, description="automatic replans of a command after failed steps")
+    approve_plans: bool = Field(False, description="plans wait for the operator's approval before they run")
 
     def planner_config(self) -> PlannerConfig:
         return PlannerConfig(

@@ -54,6 +54,7 @@ class StepState(StrEnum):
     FAILED = "failed"
     SKIPPED = "skipped"
     CANCELLED = "cancelled"
+    PAUSED = "paused"  # interrupted by a pause: runs again, from the robot's state then, on resume
 
 
 @dataclass(frozen=True)
@@ -68,7 +69,9 @@ class StepStatus:
 
 
 class PlanState(StrEnum):
+    AWAITING_APPROVAL = "awaiting_approval"  # planned; runs when the operator approves it
     RUNNING = "running"
+    PAUSED = "paused"
     SUCCEEDED = "succeeded"
     FAILED = "failed"
     CANCELLED = "cancelled"
@@ -104,6 +107,9 @@ class ExecutePlan:
 
     plan_json: Any
     text: str = ""
+    # A revision of this command (an operator's edit of its plan) instead of a new command; runs without asking
+    # for approval, since the operator wrote it.
+    command_id: int | None = None
 
 
 @dataclass(frozen=True)
@@ -131,7 +137,32 @@ class Replan:
 
 @dataclass(frozen=True)
 class CancelPlan:
-    """Stop executing the current plan (not an e-stop: the robot keeps balancing)."""
+    """Stop executing the current plan, or reject one awaiting approval (not an e-stop: the robot keeps
+    balancing)."""
+
+
+@dataclass(frozen=True)
+class ApprovePlan:
+    """Run the plan awaiting approval; `plan_id` guards against approving a plan that has since been replaced."""
+
+    plan_id: int | None = None
+
+
+@dataclass(frozen=True)
+class PausePlan:
+    """Interrupt the running step and hold still; `ResumePlan` runs that step again from the robot's state then."""
+
+
+@dataclass(frozen=True)
+class ResumePlan:
+    """Go on with a paused plan."""
+
+
+@dataclass(frozen=True)
+class SetApproval:
+    """Whether new plans (and automatic replans) wait for the operator's approval before they run."""
+
+    required: bool
 
 
 @dataclass(frozen=True)
@@ -178,7 +209,7 @@ class ResetRobot:
     """Simulation only: put the robot back standing at its start pose (after a fall, or to start over)."""
 
 
-PlanCommand = RunCommand | ExecutePlan | Replan | CancelPlan
+PlanCommand = RunCommand | ExecutePlan | Replan | CancelPlan | ApprovePlan | PausePlan | ResumePlan | SetApproval
 MotionCommand = Teleop | StopTeleop | SetPosture | ResetRobot | PlaceObstacle
 Command = PlanCommand | MotionCommand | EStop | ReleaseEStop
 
@@ -190,6 +221,7 @@ class Refusal(StrEnum):
     INVALID = "invalid"  # 422
     NOTHING_TO_REPLAN = "nothing_to_replan"  # 409
     NOT_LATCHED = "not_latched"  # 409
+    NOTHING_TO_DO = "nothing_to_do"  # 409: no plan awaits approval, none is running to pause, none is paused
     BUSY = "busy"  # 409: the robot is doing something else (a plan, teleop, walking)
     UNSUPPORTED = "unsupported"  # 501: not possible with this backend (e.g. reset on hardware)
     UNAVAILABLE = "unavailable"  # 503: the worker does not answer
@@ -399,6 +431,7 @@ class RobotState:
     proprioception: Proprioception | None = None
     mocap_positions: tuple[float, ...] = ()  # kinematic bodies of the scene (x, y, z each), beside qpos
     navigation: NavigationState | None = None
+    approval_required: bool = False  # plans wait for the operator's approval before they run
 
 
 @dataclass(frozen=True)
@@ -426,6 +459,7 @@ class RobotDescription:
     objects: tuple[str, ...]
     control_hz: float
     physics_hz: float
+    planner: str = "rules"  # which planner plans, and with which model: shown to the operator
 
 
 class EventSubscription(Protocol):

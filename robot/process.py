@@ -26,18 +26,22 @@ from typing import Any
 from robot.control.priority import WORKER_FIFO_PRIORITY, raise_thread_priority
 from robot.events import EventBus, Subscription
 from robot.interface import (
+    ApprovePlan,
     CancelPlan,
     Command,
     CommandReply,
     EStop,
     Event,
+    PausePlan,
     PlaceObstacle,
     Refusal,
     ReleaseEStop,
     ResetRobot,
+    ResumePlan,
     RobotDescription,
     RobotState,
     SensorFeed,
+    SetApproval,
     SetPosture,
     StopTeleop,
     Teleop,
@@ -52,7 +56,8 @@ STATE_PERIOD_S = 0.01  # state snapshots sent to the parent at up to 100 Hz
 REPLY_TIMEOUT_S = 90.0
 STARTUP_TIMEOUT_S = 180.0
 # Commands that must never queue behind a slow one: handled inline by the child's receiving thread.
-_IMMEDIATE = (EStop, ReleaseEStop, CancelPlan, Teleop, StopTeleop, SetPosture, ResetRobot, PlaceObstacle)
+_IMMEDIATE = (EStop, ReleaseEStop, CancelPlan, Teleop, StopTeleop, SetPosture, ResetRobot, PlaceObstacle, PausePlan,
+              ApprovePlan, ResumePlan, SetApproval)  # fmt: skip
 
 
 class WorkerProcess:
@@ -66,8 +71,10 @@ class WorkerProcess:
         perception: bool = True,
         planning: PlannerConfig | None = None,
         max_auto_replans: int = 2,
+        approve_plans: bool = False,
     ) -> None:
         self._seed = seed
+        self._approve_plans = approve_plans
         self._planning = planning or PlannerConfig()
         self._max_auto_replans = max_auto_replans
         self._perception = perception
@@ -101,6 +108,7 @@ class WorkerProcess:
                 self._perception,
                 self._planning,
                 self._max_auto_replans,
+                self._approve_plans,
             ),
             name="robot-worker",
             daemon=True,
@@ -228,6 +236,7 @@ def child_main(
     perception: bool = True,
     planning: PlannerConfig | None = None,
     max_auto_replans: int = 2,
+    approve_plans: bool = False,
 ) -> None:
     """Entry point of the worker process: build the robot, then serve commands until told to stop."""
     try:
@@ -235,7 +244,8 @@ def child_main(
         from robot.worker import RobotWorker
 
         worker = RobotWorker(generate_world(seed), realtime=realtime, control_hz=control_hz, perception=perception,
-                             planning=planning, max_auto_replans=max_auto_replans)  # fmt: skip
+                             planning=planning, max_auto_replans=max_auto_replans,
+                             approve_plans=approve_plans)  # fmt: skip
         subscription = worker.subscribe()
         description = worker.describe()
         if realtime:  # every thread started from here on inherits it; the control loop goes higher still

@@ -36,6 +36,7 @@ from robot.control.stats import LoopStats
 from robot.control.whole_body import UPPER_BODY_JOINTS
 from robot.events import EventBus, Subscription
 from robot.interface import (
+    ApprovePlan,
     CancelPlan,
     Command,
     CommandReply,
@@ -48,6 +49,7 @@ from robot.interface import (
     Mode,
     NavigationState,
     ObjectPose,
+    PausePlan,
     PerceptionState,
     PlaceObstacle,
     Plan,
@@ -59,10 +61,12 @@ from robot.interface import (
     ReleaseEStop,
     Replan,
     ResetRobot,
+    ResumePlan,
     RobotDescription,
     RobotState,
     RunCommand,
     SensorFeed,
+    SetApproval,
     SetPosture,
     StepState,
     StepStatus,
@@ -138,6 +142,8 @@ class _Job:
     plan: Plan
     cancel: threading.Event
     fault: str | None = None  # set with `cancel` when a fault (a fall) stopped the plan
+    pausing: bool = False  # set with `cancel` when the operator paused the plan
+    start: int = 0  # the step to start from (a resumed plan goes on from its paused step)
 
 
 # How fast the legs go from the walk's last posture to the standing one (rad/s): 0.34 rad in ~0.85 s when carrying.
@@ -154,6 +160,7 @@ class RobotWorker:
         planner: Planner | None = None,
         planning: PlanningPipeline | PlannerConfig | None = None,
         max_auto_replans: int = 2,
+        approve_plans: bool = False,
         capabilities: dict[str, Capability] | None = None,
         realtime: bool = True,
         control_hz: float = 100.0,
@@ -197,6 +204,8 @@ class RobotWorker:
         self._stop_drift = StopDrift()  # what stopping a walk does to the pose, learnt by every final approach
         self._current_job: _Job | None = None
         self._finished_job: _Job | None = None  # the last plan that ran, shown until the next one starts
+        self._held_job: _Job | None = None  # a plan awaiting approval, or a paused one
+        self._approval_required = approve_plans
         self._last_command: tuple[int, str] | None = None  # (command_id, text) of the command being served
         self._next_command_id = 1
         self._next_plan_id = 1
@@ -280,6 +289,14 @@ class RobotWorker:
             return self._release_estop(command)
         if isinstance(command, CancelPlan):
             return self._cancel_plan("cancelled by operator")
+        if isinstance(command, ApprovePlan):
+            return self._approve_plan(command)
+        if isinstance(command, PausePlan):
+            return self._pause_plan()
+        if isinstance(command, ResumePlan):
+            return self._resume_plan()
+        if isinstance(command, SetApproval):
+            return self._set_approval(command.required)
         if isinstance(command, RunCommand):
             return self._run_command(command)
         if isinstance(command, ExecutePlan):
@@ -321,6 +338,7 @@ class RobotWorker:
                 objects=self.layout.object_names,
                 control_hz=self.control_hz,
                 physics_hz=1.0 / self.backend.physics_dt,
+                planner=self.planning.describe(),
             )
         return self._description
 
@@ -789,7 +807,14 @@ class RobotWorker:
         checked, errors = validate_plan_json(command.plan_json, self._world_context())
         if checked is None:
             return CommandReply(False, "invalid plan", Refusal.INVALID, tuple(errors))
-        return self._enqueue(command.text or "(operator plan)", checked, new_command=True)
+        if command.command_id is not None:  # the operator's edit of a command's plan: its next revision
+            last = self._last_command
+            if last is None or last[0] != command.command_id:
+                current = f"the current one is {last[0]}" if last else "there is none"
+                return CommandReply(False, f"command {command.command_id} is not the current command ({current})",
+                                    Refusal.INVALID, ("stale command id",))  # fmt: skip
+            return self._enqueue(last[1], checked, new_command=False, command_id=last[0], approved=True)
+        return self._enqueue(command.text or "(operator plan)", checked, new_command=True, approved=True)
 
     def _replan(self) -> CommandReply:
         """The operator's replan: the current command planned again from the robot's state now."""
@@ -837,7 +862,10 @@ class RobotWorker:
         new_command: bool,
         command_id: int | None = None,
         planned: PlanResult | None = None,
+        approved: bool = False,
     ) -> CommandReply:
+        """Start a plan (a new command's, or a new revision of the current one), superseding whatever ran or
+        waited; with approval required, a planner's plan waits for the operator instead."""
         with self._lock:
             # an e-stop (or teleop) may have come in while planning
             if refusal := self._refuse_if_unsafe() or self._refuse_if_teleop():
@@ -857,12 +885,13 @@ class RobotWorker:
             if self._current_job:
                 self._current_job.cancel.set()  # the newest command or plan revision preempts the running one
             self._drain_queued_jobs("superseded by a newer plan")
+            awaits = self._approval_required and not approved
             status = PlanStatus(
                 plan_id=plan_id,
                 command_id=command_id,
                 command_text=text,
                 revision=revision,
-                state=PlanState.RUNNING,
+                state=PlanState.AWAITING_APPROVAL if awaits else PlanState.RUNNING,
                 steps=tuple(StepStatus(i, s.action, dict(s.args)) for i, s in enumerate(plan.steps)),
             )
             self._bus.publish(
@@ -878,19 +907,84 @@ class RobotWorker:
                 notes=list(planned.notes) if planned else [],
                 planning_ms=round(planned.latency_s * 1000, 1) if planned else 0.0,
             )
-            self._jobs.put(_Job(status, plan, threading.Event()))
+            job = _Job(status, plan, threading.Event())
+            if awaits:
+                self._held_job = job
+            else:
+                self._jobs.put(job)
+        if awaits:
+            self._bus.publish("plan/awaiting_approval", f"plan {plan_id} awaits the operator's approval",
+                              plan_id=plan_id, command_id=command_id)  # fmt: skip
         how = f" (planned by {planned.planner}: {'; '.join(planned.notes)})" if planned and planned.notes else ""
-        return CommandReply(True, f"plan {plan_id} queued{how}", command_id=command_id, plan=plan)
+        queued = "awaits approval" if awaits else "queued"
+        return CommandReply(True, f"plan {plan_id} {queued}{how}", command_id=command_id, plan=plan)
+
+    def _approve_plan(self, command: ApprovePlan) -> CommandReply:
+        with self._lock:
+            if refusal := self._refuse_if_unsafe() or self._refuse_if_teleop():
+                return refusal
+            job = self._held_job
+            if job is None or job.status.state != PlanState.AWAITING_APPROVAL:
+                return CommandReply(False, "no plan awaits approval", Refusal.NOTHING_TO_DO)
+            if command.plan_id is not None and command.plan_id != job.status.plan_id:
+                return CommandReply(False, f"plan {command.plan_id} no longer awaits approval (plan "
+                                    f"{job.status.plan_id} does)", Refusal.INVALID, ("stale plan id",))  # fmt: skip
+            self._held_job = None
+            job.status = replace(job.status, state=PlanState.RUNNING)
+            self._jobs.put(job)
+        self._bus.publish("plan/approved", f"plan {job.status.plan_id} approved", plan_id=job.status.plan_id)
+        return CommandReply(True, f"plan {job.status.plan_id} approved", command_id=job.status.command_id,
+                            plan=job.plan)  # fmt: skip
+
+    def _pause_plan(self) -> CommandReply:
+        with self._lock:
+            job = self._current_job
+            if job is None:
+                return CommandReply(False, "no plan is running", Refusal.NOTHING_TO_DO)
+            job.pausing = True
+            job.cancel.set()
+        return CommandReply(True, f"pausing plan {job.status.plan_id}")
+
+    def _resume_plan(self) -> CommandReply:
+        with self._lock:
+            if refusal := self._refuse_if_unsafe() or self._refuse_if_teleop():
+                return refusal
+            job = self._held_job
+            if job is None or job.status.state != PlanState.PAUSED:
+                return CommandReply(False, "no plan is paused", Refusal.NOTHING_TO_DO)
+            start = next(s.index for s in job.status.steps if s.state == StepState.PAUSED)
+            steps = tuple(replace(s, state=StepState.PENDING, detail="") if s.index == start else s
+                          for s in job.status.steps)  # fmt: skip
+            resumed = _Job(replace(job.status, state=PlanState.RUNNING, steps=steps), job.plan, threading.Event(),
+                           start=start)  # fmt: skip
+            self._held_job = None
+            self._jobs.put(resumed)
+        self._bus.publish("plan/resumed", f"plan {job.status.plan_id} resumed at step {start + 1}",
+                          plan_id=job.status.plan_id)  # fmt: skip
+        return CommandReply(True, f"plan {job.status.plan_id} resumed at step {start + 1}",
+                            command_id=job.status.command_id)  # fmt: skip
+
+    def _set_approval(self, required: bool) -> CommandReply:
+        with self._lock:
+            self._approval_required = required
+        self._bus.publish("plan/approval", "plans wait for approval" if required else "plans run when planned",
+                          required=required)  # fmt: skip
+        return CommandReply(True, "plans now wait for approval" if required else "plans now run when planned")
 
     def _cancel_plan(self, reason: str) -> CommandReply:
         with self._lock:
             job = self._current_job
+            held = self._held_job
             if job:
                 job.cancel.set()
             self._drain_queued_jobs(reason)
-        return CommandReply(True, "plan cancelled" if job else "no plan running")
+        return CommandReply(True, "plan cancelled" if job or held else "no plan running")
 
     def _drain_queued_jobs(self, reason: str) -> None:
+        """Cancel every plan that has not started (queued, awaiting approval, paused); under the lock."""
+        held, self._held_job = self._held_job, None
+        if held is not None:
+            self._end_unstarted(held, reason)
         while True:
             try:
                 job = self._jobs.get_nowait()
@@ -899,18 +993,21 @@ class RobotWorker:
             if job is None:
                 self._jobs.put(None)
                 return
-            job.cancel.set()
-            steps = tuple(replace(s, state=StepState.CANCELLED, detail=reason) for s in job.status.steps)
-            job.status = replace(job.status, state=PlanState.CANCELLED, steps=steps)
-            self._finished_job = job
-            self._bus.publish(
-                "plan/finished",
-                f"plan {job.status.plan_id} {reason}",
-                Level.WARN,
-                plan_id=job.status.plan_id,
-                state=PlanState.CANCELLED.value,
-                steps=_step_summary(steps),
-            )
+            self._end_unstarted(job, reason)
+
+    def _end_unstarted(self, job: _Job, reason: str) -> None:
+        job.cancel.set()
+        steps = tuple(
+            s if s.state in (StepState.SUCCEEDED, StepState.FAILED) else replace(s, state=StepState.CANCELLED,
+                                                                                 detail=reason)
+            for s in job.status.steps
+        )  # fmt: skip
+        job.status = replace(job.status, state=PlanState.CANCELLED, steps=steps)
+        self._finished_job = job
+        self._bus.publish(
+            "plan/finished", f"plan {job.status.plan_id} {reason}", Level.WARN, plan_id=job.status.plan_id,
+            state=PlanState.CANCELLED.value, steps=_step_summary(steps),
+        )  # fmt: skip
 
     # ----------------------------------------------------------------------------------------------------------
     # teleop, postures, reset
@@ -1045,8 +1142,10 @@ class RobotWorker:
                 wait_sim=lambda seconds, cancel=job.cancel: self._wait_sim(seconds, cancel),
                 held_object=lambda: self._held_object,
                 fault=lambda j=job: j.fault,
+                pausing=lambda j=job: j.pausing,
             )
-            result = self._executor.run(job.plan, context, lambda i, st, d, j=job: self._on_step(j, i, st, d))
+            result = self._executor.run(job.plan, context, lambda i, st, d, j=job: self._on_step(j, i, st, d),
+                                        start=job.start)  # fmt: skip
             with contextlib.suppress(Cancelled):  # a plan ends with the robot at rest, its arm included
                 self._wait_arm_finished(job.cancel)
             failure, _ = _failure_of(job)
@@ -1056,6 +1155,8 @@ class RobotWorker:
                 job.status = replace(job.status, state=result, replanning=result == PlanState.FAILED and replans_left)
                 self._current_job = None
                 self._finished_job = job
+                if result == PlanState.PAUSED:
+                    self._held_job = job
             if self._last_command is not None and self._last_command[0] == job.status.command_id:
                 self._memory.update_last(outcome=result.value + (f": {failure}" if failure else ""))
             level = Level.OK if result == PlanState.SUCCEEDED else Level.WARN
@@ -1243,7 +1344,8 @@ class RobotWorker:
             else:
                 mode = Mode.IDLE
             posture = self._posture_name.value if self._posture.settled else "moving"
-            shown = job or self._finished_job
+            shown = job or self._held_job or self._finished_job
+            approval = self._approval_required
             plan_status = shown.status if shown else None
         position = measured.base_position
         self._board.publish(
@@ -1259,6 +1361,7 @@ class RobotWorker:
                 qpos=tuple(self.backend.qpos().tolist()),
                 mocap_positions=tuple(self.backend.mocap_positions().ravel().tolist()),
                 navigation=self._navigation,
+                approval_required=approval,
                 objects=tuple(ObjectPose(n, p) for n, p in self.backend.object_positions().items()),
                 held_object=self._held_object,
                 plan=plan_status,

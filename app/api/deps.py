@@ -12,6 +12,7 @@ REFUSAL_STATUS = {
     Refusal.ESTOP_LATCHED: 409,
     Refusal.NOT_LATCHED: 409,
     Refusal.NOTHING_TO_REPLAN: 409,
+    Refusal.NOTHING_TO_DO: 409,
     Refusal.BUSY: 409,
     Refusal.UNSUPPORTED: 501,
     Refusal.INVALID: 422,

@@ -5,22 +5,26 @@ from __future__ import annotations
 import time
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Depends, Response
+from fastapi import APIRouter, Depends, HTTPException, Response
 from pydantic import BaseModel, ConfigDict, Field
 
 from app.api.deps import raise_if_refused, runtime
 from app.runtime import Runtime
 from app.serialize import event_json, reply_json, state_json
 from robot.interface import (
+    ApprovePlan,
     CancelPlan,
     EStop,
     ExecutePlan,
+    PausePlan,
     PlaceObstacle,
     Posture,
     ReleaseEStop,
     Replan,
     ResetRobot,
+    ResumePlan,
     RunCommand,
+    SetApproval,
     SetPosture,
     StopTeleop,
     Teleop,
@@ -32,12 +36,27 @@ RuntimeDep = Annotated[Runtime, Depends(runtime)]
 
 
 class CommandIn(BaseModel):
-    """A typed command, or an explicit plan (checked against the plan schema and the world)."""
+    """A typed command, or an explicit plan (checked against the plan schema and the world): ours,
+    `{"steps": [{"action": ..., "args": {...}}]}`, or the seed's list of flat actions. With `command_id`, the plan
+    is the operator's edit of that command's plan (its next revision), and runs without asking for approval."""
 
     model_config = ConfigDict(extra="forbid")
     text: str = Field("", max_length=MAX_COMMAND_CHARS, examples=["pick up the red mug from the kitchen counter"])
-    plan: dict[str, Any] | None = Field(None, examples=[{"steps": [{"action": "say", "args": {"text": "hello"}}]}])
+    plan: dict[str, Any] | list[Any] | None = Field(
+        None, examples=[{"steps": [{"action": "say", "args": {"text": "hello"}}]}]
+    )
+    command_id: int | None = Field(None, ge=1, description="revise this command's plan (with `plan`)")
     source: str = Field("api", max_length=16, pattern=r"^[a-z_]+$")
+
+
+class ApproveIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    plan_id: int | None = Field(None, ge=1, description="the plan being approved (refused if another awaits)")
+
+
+class ApprovalIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    required: bool
 
 
 class EStopIn(BaseModel):
@@ -93,6 +112,9 @@ def config(rt: RuntimeDep) -> dict[str, Any]:
         "objects": list(description.objects),
         "control_hz": description.control_hz,
         "physics_hz": description.physics_hz,
+        "planner": description.planner,
+        "planner_backend": rt.settings.planner_backend,
+        "approval_required": rt.worker.state().approval_required,
         "session_id": rt.recorder.session_id,
     }
 
@@ -111,7 +133,9 @@ def events(rt: RuntimeDep) -> list[dict[str, Any]]:
 def post_command(body: CommandIn, rt: RuntimeDep) -> dict[str, Any]:
     """Plan (or check the given plan) and start executing it. 422: not understood or invalid; 409: e-stop."""
     if body.plan is not None:
-        reply = rt.worker.submit(ExecutePlan(body.plan, body.text))
+        reply = rt.worker.submit(ExecutePlan(body.plan, body.text, command_id=body.command_id))
+    elif body.command_id is not None:
+        raise HTTPException(422, detail={"message": "command_id revises a plan: send the edited plan with it"})
     else:
         reply = rt.worker.submit(RunCommand(body.text))
     rt.recorder.record_command(body.text or "(plan)", body.source, reply)
@@ -129,7 +153,38 @@ def replan(rt: RuntimeDep) -> dict[str, Any]:
 
 @router.post("/plan/cancel")
 def cancel_plan(rt: RuntimeDep) -> dict[str, Any]:
+    """Stop the running plan, or reject the one awaiting approval; the robot stands where it is."""
     return reply_json(rt.worker.submit(CancelPlan()))
+
+
+@router.post("/plan/approve")
+def approve_plan(rt: RuntimeDep, body: ApproveIn | None = None) -> dict[str, Any]:
+    """Run the plan awaiting approval. 409 when none awaits; 422 when `plan_id` is not the one that does."""
+    reply = rt.worker.submit(ApprovePlan((body or ApproveIn()).plan_id))
+    raise_if_refused(reply)
+    return reply_json(reply)
+
+
+@router.post("/plan/pause")
+def pause_plan(rt: RuntimeDep) -> dict[str, Any]:
+    """Interrupt the running step and stand still; 409 when no plan runs."""
+    reply = rt.worker.submit(PausePlan())
+    raise_if_refused(reply)
+    return reply_json(reply)
+
+
+@router.post("/plan/resume")
+def resume_plan(rt: RuntimeDep) -> dict[str, Any]:
+    """Run the paused step again (from the robot's state now) and go on; 409 when no plan is paused."""
+    reply = rt.worker.submit(ResumePlan())
+    raise_if_refused(reply)
+    return reply_json(reply)
+
+
+@router.put("/plan/approval")
+def set_approval(body: ApprovalIn, rt: RuntimeDep) -> dict[str, Any]:
+    """Whether plans (automatic replans too) wait for the operator's approval before they run."""
+    return reply_json(rt.worker.submit(SetApproval(body.required)))
 
 
 @router.post("/estop")

@@ -39,6 +39,8 @@ class ExecutionContext:
     # Why the plan was stopped, when a fault stopped it (a fall) rather than the operator: the running step then
     # fails with this reason instead of counting as cancelled, so the operator and a replanner see what happened.
     fault: Callable[[], str | None] = field(default=lambda: None)
+    # True when `cancel` was set to pause the plan rather than end it: the running step is left to run again.
+    pausing: Callable[[], bool] = field(default=lambda: False)
 
     def check_cancelled(self) -> None:
         if self.cancel.is_set():
@@ -87,9 +89,15 @@ class PlanExecutor:
     def __init__(self, capabilities: dict[str, Capability]) -> None:
         self._capabilities = capabilities
 
-    def run(self, plan: Plan, ctx: ExecutionContext, on_step: StepCallback) -> PlanState:
+    def run(self, plan: Plan, ctx: ExecutionContext, on_step: StepCallback, start: int = 0) -> PlanState:
+        """Run the steps from `start` (a resumed plan goes on from its paused step)."""
         for index, step in enumerate(plan.steps):
+            if index < start:
+                continue
             if ctx.cancel.is_set():
+                if ctx.pausing():
+                    on_step(index, StepState.PAUSED, "paused: runs on resume")
+                    return PlanState.PAUSED
                 self._skip_rest(plan, index, on_step, StepState.CANCELLED, "plan cancelled")
                 return PlanState.CANCELLED
             on_step(index, StepState.RUNNING, "")
@@ -99,6 +107,9 @@ class PlanExecutor:
                     raise CapabilityUnavailable(f"no capability for action {step.action!r}")
                 detail = capability(step.args, replace(ctx, upcoming=tuple(plan.steps[index + 1 :])))
             except Cancelled:
+                if ctx.pausing() and ctx.fault() is None:
+                    on_step(index, StepState.PAUSED, "paused while running: runs again on resume")
+                    return PlanState.PAUSED
                 fault = ctx.fault()
                 if fault is not None:
                     on_step(index, StepState.FAILED, fault)

@@ -192,3 +192,39 @@ def test_teleop_posture_and_reset_endpoints(client) -> None:
     assert worker.wait_for(lambda s: s.locomotion.posture == "stand" and not s.fallen, 5.0)
     state = client.get("/api/state").json()
     assert state["locomotion"]["phase"] == "standing" and state["mode"] == "idle"
+
+
+def _wait_plan(client, predicate, timeout_s: float = 10.0) -> dict:
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        plan = client.get("/api/state").json()["plan"]
+        if plan is not None and predicate(plan):
+            return plan
+        time.sleep(0.05)
+    raise AssertionError(f"plan state not reached: {client.get('/api/state').json()['plan']}")
+
+
+def test_plans_can_wait_for_approval_be_approved_paused_and_resumed(client) -> None:
+    assert client.put("/api/plan/approval", json={"required": True}).status_code == 200
+    assert client.get("/api/config").json()["approval_required"] is True
+    queued = client.post("/api/commands", json={"text": "say hello"}).json()
+    assert "awaits approval" in queued["message"]
+    plan_id = _wait_plan(client, lambda p: p["state"] == "awaiting_approval")["plan_id"]
+    assert client.post("/api/plan/approve", json={"plan_id": plan_id + 5}).status_code == 422
+    assert client.post("/api/plan/approve", json={"plan_id": plan_id}).status_code == 200
+    assert client.post("/api/plan/approve").status_code == 409
+    _wait_plan(client, lambda p: p["state"] == "succeeded")
+    client.put("/api/plan/approval", json={"required": False})
+    assert client.post("/api/plan/resume").status_code == 409
+    assert client.post("/api/commands", json={"plan": [{"action": "wait", "seconds": 3}]}).status_code == 202
+    _wait_plan(client, lambda p: p["steps"][0]["state"] == "running" and p["steps"][0]["action"] == "wait")
+    assert client.post("/api/plan/pause").status_code == 200
+    _wait_plan(client, lambda p: p["state"] == "paused")
+    assert client.post("/api/plan/resume").status_code == 200
+    _wait_plan(client, lambda p: p["state"] == "running")
+    assert client.post("/api/commands", json={"command_id": 1}).status_code == 422  # an edit needs its plan
+
+
+def test_config_says_which_planner_plans(client) -> None:
+    config = client.get("/api/config").json()
+    assert config["planner_backend"] == "rules" and config["planner"].startswith("rules")

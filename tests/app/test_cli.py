@@ -89,3 +89,41 @@ def test_bench_capstone_names_the_tasks_it_knows_when_given_another(tmp_path) ->
     done = humanoid(tmp_path, "bench", "capstone", "--tasks", "pick,juggle", "--seeds", "1")
     assert done.returncode == 2
     assert "juggle" in done.stderr and "pick, bring, blocked" in done.stderr
+
+
+def test_plan_prints_the_validated_plan_in_the_seeds_format_without_moving_anything(tmp_path) -> None:
+    done = humanoid(tmp_path, "plan", "bring the red mug to the living-room table", "--json")
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout) == [
+        {"action": "navigate_to", "target": "kitchen counter"},
+        {"action": "detect_object", "object": "red mug"},
+        {"action": "pick_object", "object": "red mug"},
+        {"action": "navigate_to", "target": "living-room table"},
+        {"action": "place_object", "location": "living-room table"},
+        {"action": "say", "text": "I have put the red mug on the living-room table."},
+    ]
+    holding = humanoid(tmp_path, "plan", "put it on the counter", "--holding", "mug", "--json")
+    assert [s["action"] for s in json.loads(holding.stdout)] == ["navigate_to", "place_object", "say"]
+    unknown = humanoid(tmp_path, "plan", "pick up the purple elephant", "--json")
+    assert unknown.returncode == 1 and "unknown object 'purple elephant'" in unknown.stderr and unknown.stdout == ""
+
+
+def test_plan_with_an_unreachable_llm_falls_back_to_rules_and_says_why(tmp_path) -> None:
+    env_url = {"HUMANOID_OPENAI_BASE_URL": "http://127.0.0.1:9/v1"}
+    done = subprocess.run([sys.executable, "-m", "app.cli", "plan", "go to the dock", "--backend", "openai", "--json"],
+                          capture_output=True, text=True, env={**os.environ, **env_url}, timeout=60)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)[0] == {"action": "navigate_to", "target": "charging dock"}
+    assert "openai: cannot reach http://127.0.0.1:9/v1" in done.stderr and "planned by rules instead" in done.stderr
+
+
+def test_bench_planner_measures_the_rules_on_the_paraphrase_suite(tmp_path) -> None:
+    out = tmp_path / "planner.json"
+    done = humanoid(tmp_path, "bench", "planner", "--output", str(out))
+    assert done.returncode == 0, done.stderr
+    result = json.loads(out.read_text())
+    rules = result["backends"]["rules"]
+    assert result["cases"] >= 60 and rules["runs"] == result["cases"]
+    assert rules["exact_rate"] == 1.0 and rules["wrong"] == [], rules["wrong"]
+    assert result["bars"]["rules_exact"]["measured"] == rules["exact_rate"]
+    assert set(rules["latency_ms"]) == {"p50", "p99", "max", "mean"}
