@@ -3,7 +3,7 @@
 "use strict";
 
 const $ = (id) => document.getElementById(id);
-const humanoid = { ws: null, state: null, estopLatencies: [], events: [], config: null };
+const humanoid = { ws: null, state: null, estopLatencies: [], events: [], config: null, planSources: {} };
 window.humanoid = humanoid;
 
 // ---- 3D mirror in a cross-site iframe ------------------------------------------------------------------------
@@ -36,6 +36,8 @@ function softwareWebGL() {
 async function loadConfig() {
   const response = await fetch("/api/config");
   humanoid.config = await response.json();
+  $("planner").textContent = "planner: " + humanoid.config.planner;
+  $("approve-toggle").checked = humanoid.config.approval_required;
   const software = softwareWebGL();
   // Browsers without a GPU get the light view: the full one keeps a CPU renderer busy ~200 ms a frame.
   const profile = software ? "light" : "full";
@@ -141,6 +143,44 @@ $("cancel").addEventListener("click", async () => {
   const { data } = await post("/api/plan/cancel");
   showResult(data.message, false);
 });
+$("pause").addEventListener("click", async () => {
+  const paused = humanoid.state && humanoid.state.plan && humanoid.state.plan.state === "paused";
+  const { ok, data } = await post(paused ? "/api/plan/resume" : "/api/plan/pause");
+  showResult(ok ? data.message : describeError(data.detail), !ok);
+});
+$("approve-toggle").addEventListener("change", async (ev) => {
+  const r = await fetch("/api/plan/approval", { method: "PUT", headers: { "Content-Type": "application/json" },
+    body: JSON.stringify({ required: ev.target.checked }) });
+  const data = await r.json();
+  showResult(r.ok ? data.message : describeError(data.detail), !r.ok);
+});
+$("approve").addEventListener("click", async () => {
+  const plan = humanoid.state && humanoid.state.plan;
+  const { ok, data } = await post("/api/plan/approve", plan ? { plan_id: plan.plan_id } : null);
+  showResult(ok ? data.message : describeError(data.detail), !ok);
+});
+$("reject").addEventListener("click", async () => {
+  const { data } = await post("/api/plan/cancel");
+  showResult(data.message === "plan cancelled" ? "plan rejected" : data.message, false);
+});
+// The plan as the seed's list of flat actions: what an operator reads and writes most easily.
+function seedList(plan) { return plan.steps.map((s) => ({ action: s.action, ...s.args })); }
+$("edit").addEventListener("click", () => {
+  const plan = humanoid.state && humanoid.state.plan;
+  if (!plan) return;
+  $("plan-json").value = JSON.stringify(seedList(plan), null, 1);
+  $("editor").hidden = false;
+});
+$("close-editor").addEventListener("click", () => { $("editor").hidden = true; });
+$("run-edited").addEventListener("click", async () => {
+  const plan = humanoid.state && humanoid.state.plan;
+  let edited;
+  try { edited = JSON.parse($("plan-json").value); } catch (e) { return showResult("not JSON: " + e.message, true); }
+  const { ok, data } = await post("/api/commands", { plan: edited, command_id: plan ? plan.command_id : null,
+    source: "edited" });
+  showResult(ok ? `edited plan: ${data.message}` : describeError(data.detail), !ok);
+  if (ok) $("editor").hidden = true;
+});
 
 // ---- rendering -----------------------------------------------------------------------------------------------
 const fmt = (v, d = 2) => (v === null || v === undefined ? "–" : Number(v).toFixed(d));
@@ -182,15 +222,20 @@ function renderPlan(plan) {
   lastPlanKey = key;
   const list = $("plan-steps");
   list.innerHTML = "";
+  const awaiting = plan && plan.state === "awaiting_approval";
+  $("approval-row").hidden = !awaiting;
+  $("pause").textContent = plan && plan.state === "paused" ? "Resume" : "Pause";
   if (!plan) { $("plan-text").textContent = "no plan yet"; $("plan-state").textContent = ""; return; }
   $("plan-text").textContent = `"${plan.command_text}", plan ${plan.plan_id}, revision ${plan.revision}`;
-  $("plan-state").textContent = plan.state;
+  $("plan-state").textContent = plan.state.replace("_", " ") + (plan.replanning ? ": replanning" : "");
+  const source = humanoid.planSources[plan.plan_id];
+  $("plan-source").textContent = source || "";
   for (const step of plan.steps) {
     const li = document.createElement("li");
     li.dataset.state = step.state;
-    const arg = Object.values(step.args)[0];
+    const args = Object.values(step.args).join(", ");
     li.innerHTML = `<code></code><span class="step-state st-${step.state}">${step.state}</span><span class="step-detail"></span>`;
-    li.querySelector("code").textContent = `${step.action}(${arg})`;
+    li.querySelector("code").textContent = `${step.action}(${args})`;
     li.querySelector(".step-detail").textContent = step.detail || "";
     list.appendChild(li);
   }
@@ -198,6 +243,15 @@ function renderPlan(plan) {
 
 function addEvent(e) {
   humanoid.events.push(e);
+  if (e.kind === "plan/created") {
+    // who planned it, how long it took, and why the configured planner's plan was not used as it came
+    const d = e.data;
+    const ms = d.planning_ms ? ` in ${fmt(d.planning_ms, 0)} ms` : "";
+    const notes = d.notes && d.notes.length ? ` (${d.notes.join("; ")})` : "";
+    humanoid.planSources[d.plan_id] = d.planner === "operator" ? "written by the operator" : `planned by ${d.planner}${ms}${notes}`;
+    lastPlanKey = "";
+    if (humanoid.state) renderPlan(humanoid.state.plan);
+  }
   if (e.kind === "estop/latched" && e.data.latency_ms !== undefined) {
     humanoid.estopLatencies.push(e.data.latency_ms);
     $("st-estop").textContent = `${fmt(e.data.latency_ms, 1)} ms (press to control loop)`;

@@ -62,6 +62,36 @@ def test_typed_command_runs_and_the_plan_shows_per_step_status(page) -> None:
     expect(page.locator("#command-result")).to_contain_text("unknown object 'purple elephant'")
 
 
+def test_an_operator_approves_edits_and_pauses_plans_from_the_page(page) -> None:
+    expect = playwright_api.expect
+    expect(page.locator("#planner")).to_contain_text("planner: rules")
+    page.check("#approve-toggle")
+    expect(page.locator("#command-result")).to_contain_text("plans now wait for approval")
+    page.fill("#command-text", "say nothing moves until I approve")
+    page.click("#send")
+    expect(page.locator("#plan-state")).to_have_text("awaiting approval", timeout=10_000)
+    expect(page.locator("#plan-source")).to_contain_text("planned by rules")
+    page.click("#edit")
+    page.fill("#plan-json", '[{"action": "say", "text": "edited by the operator"}]')
+    page.click("#run-edited")
+    expect(page.locator("#plan-state")).to_have_text("succeeded", timeout=10_000)
+    expect(page.locator("#plan-steps li").first).to_contain_text('said "edited by the operator"')
+    expect(page.locator("#plan-source")).to_contain_text("written by the operator")
+    page.uncheck("#approve-toggle")
+    expect(page.locator("#command-result")).to_contain_text("plans now run when planned")
+
+    page.fill("#command-text", "wait 20 seconds")
+    page.click("#send")
+    expect(page.locator("#plan-steps li").first).to_have_attribute("data-state", "running", timeout=10_000)
+    page.click("#pause")
+    expect(page.locator("#plan-state")).to_have_text("paused", timeout=10_000)
+    expect(page.locator("#pause")).to_have_text("Resume")
+    page.click("#pause")
+    expect(page.locator("#plan-state")).to_have_text("running", timeout=10_000)
+    page.click("#cancel")
+    expect(page.locator("#plan-state")).to_have_text("cancelled", timeout=10_000)
+
+
 def test_estop_button_latches_the_robot_and_release_is_explicit(page, server) -> None:
     expect = playwright_api.expect
     page.click("#estop")
