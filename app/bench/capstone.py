@@ -64,6 +64,7 @@ def run_task(task: str, seed: int, timeout_s: float = 600.0) -> dict[str, Any]:
                 and s.plan is not None
                 and s.plan.command_id == reply.command_id
                 and s.plan.state != "running"
+                and not s.plan.replanning  # a failed step is replanned: the command's last revision decides
             ),
             timeout_s,
         )
@@ -104,6 +105,7 @@ def run_task(task: str, seed: int, timeout_s: float = 600.0) -> dict[str, Any]:
         "mug": [round(float(v), 3) for v in mug_position],
         "mug_tilt_deg": round(mug_tilt, 1),
         "replans": int(replans),
+        "plan_revisions": state.plan.revision if state.plan is not None else 0,
         "blocked_at": None if blocker is None else blocker.dropped_at,
         "steps": _step_times(state.plan),
     }

@@ -1,6 +1,6 @@
 """A chat model run in this process by llama-cpp-python from a GGUF file, for robots with no network.
 
-An optional extra (`pip install .[local-llm]`): it compiles llama.cpp on install (about 5 minutes here). Output is
+An optional extra (`pip install .[local-llm]`): it compiles llama.cpp on install (about 3 minutes on 2 cores). Output is
 constrained by a grammar built from the plan's JSON schema, so a small model still answers in the right shape.
 """
 

@@ -55,8 +55,13 @@ class OpenAIChat:
         for candidate in modes:
             try:
                 answer = self._complete(messages, schema, candidate)
-            except (self._openai.BadRequestError, self._openai.UnprocessableEntityError) as exc:
-                # 400/422: this server does not take this response format (or the request at all)
+            except self._openai.APIStatusError as exc:
+                # 400/422, or a 500 naming the field (llama-cpp-python's server): it does not take this format
+                refused = isinstance(exc, self._openai.BadRequestError | self._openai.UnprocessableEntityError) or (
+                    candidate != "none" and "response_format" in str(getattr(exc, "body", "") or exc)
+                )
+                if not refused:
+                    raise PlanningError(f"{self.describe()} answered {_status_text(exc)}") from exc
                 if mode != "auto":
                     raise PlanningError(f"{self.describe()} refused the request: {_status_text(exc)}") from exc
                 last_refusal = PlanningError(f"{self.describe()} refused every response format: {_status_text(exc)}")
@@ -65,8 +70,6 @@ class OpenAIChat:
                 raise PlanningError(f"{self.describe()} timed out after {self.timeout_s:g} s") from exc
             except self._openai.APIConnectionError as exc:
                 raise PlanningError(f"cannot reach {self.base_url}: {exc.__cause__ or exc}") from exc
-            except self._openai.APIStatusError as exc:
-                raise PlanningError(f"{self.describe()} answered {_status_text(exc)}") from exc
             except self._openai.OpenAIError as exc:
                 raise PlanningError(f"{self.describe()} failed: {exc}") from exc
             if mode == "auto":

@@ -97,6 +97,20 @@ def test_auto_steps_down_to_json_object_on_a_server_that_refuses_json_schema_and
     assert len(server.requests) == 3 and server.requests[2]["response_format"]["type"] == "json_object"
 
 
+def test_a_500_that_names_the_response_format_is_a_refusal_too(server: Server) -> None:
+    # llama-cpp-python's server answers an unknown response_format type with a 500 naming the field
+    def respond(body: dict[str, Any]) -> tuple[int, dict[str, Any]]:
+        if body.get("response_format", {}).get("type") == "json_schema":
+            return 500, {"error": {"message": "1 validation error: ('body', 'response_format', 'type') Input should "
+                                              "be 'text' or 'json_object'"}}  # fmt: skip
+        return 200, completion(json.dumps(PLAN))
+
+    server.respond = respond
+    chat = OpenAIChat(server.url, "m")
+    assert json.loads(chat.chat(MESSAGES, flat_plan_schema())) == PLAN
+    assert chat.response_format == "json_object"
+
+
 def test_a_server_that_refuses_every_format_is_asked_without_one(server: Server) -> None:
     def respond(body: dict[str, Any]) -> tuple[int, dict[str, Any]]:
         if "response_format" in body:
