@@ -14,6 +14,7 @@ from app.serialize import event_json, reply_json, state_json
 from robot.interface import (
     ApprovePlan,
     CancelPlan,
+    Command,
     EStop,
     ExecutePlan,
     PausePlan,
@@ -33,6 +34,13 @@ from robot.worker import MAX_COMMAND_CHARS
 
 router = APIRouter(prefix="/api", tags=["robot"])
 RuntimeDep = Annotated[Runtime, Depends(runtime)]
+
+
+def _accepted(rt: Runtime, command: Command) -> dict[str, Any]:
+    """Submit a command; its reply as JSON, or the HTTP error its refusal maps to."""
+    reply = rt.worker.submit(command)
+    raise_if_refused(reply)
+    return reply_json(reply)
 
 
 class CommandIn(BaseModel):
@@ -146,9 +154,7 @@ def post_command(body: CommandIn, rt: RuntimeDep) -> dict[str, Any]:
 @router.post("/replan", status_code=202)
 def replan(rt: RuntimeDep) -> dict[str, Any]:
     """Re-run the planner for the current command from the current state."""
-    reply = rt.worker.submit(Replan())
-    raise_if_refused(reply)
-    return reply_json(reply)
+    return _accepted(rt, Replan())
 
 
 @router.post("/plan/cancel")
@@ -160,25 +166,19 @@ def cancel_plan(rt: RuntimeDep) -> dict[str, Any]:
 @router.post("/plan/approve")
 def approve_plan(rt: RuntimeDep, body: ApproveIn | None = None) -> dict[str, Any]:
     """Run the plan awaiting approval. 409 when none awaits; 422 when `plan_id` is not the one that does."""
-    reply = rt.worker.submit(ApprovePlan((body or ApproveIn()).plan_id))
-    raise_if_refused(reply)
-    return reply_json(reply)
+    return _accepted(rt, ApprovePlan((body or ApproveIn()).plan_id))
 
 
 @router.post("/plan/pause")
 def pause_plan(rt: RuntimeDep) -> dict[str, Any]:
     """Interrupt the running step and stand still; 409 when no plan runs."""
-    reply = rt.worker.submit(PausePlan())
-    raise_if_refused(reply)
-    return reply_json(reply)
+    return _accepted(rt, PausePlan())
 
 
 @router.post("/plan/resume")
 def resume_plan(rt: RuntimeDep) -> dict[str, Any]:
     """Run the paused step again (from the robot's state now) and go on; 409 when no plan is paused."""
-    reply = rt.worker.submit(ResumePlan())
-    raise_if_refused(reply)
-    return reply_json(reply)
+    return _accepted(rt, ResumePlan())
 
 
 @router.put("/plan/approval")
@@ -200,17 +200,13 @@ def estop(rt: RuntimeDep, body: EStopIn | None = None) -> dict[str, Any]:
 @router.post("/estop/reset")
 def estop_reset(rt: RuntimeDep) -> dict[str, Any]:
     """Release a latched e-stop. Never restarts motion: a new command or a replan does."""
-    reply = rt.worker.submit(ReleaseEStop(source="api"))
-    raise_if_refused(reply)
-    return reply_json(reply)
+    return _accepted(rt, ReleaseEStop(source="api"))
 
 
 @router.post("/teleop")
 def teleop(body: TeleopIn, rt: RuntimeDep) -> dict[str, Any]:
     """Drive the robot's velocity (409 while a plan runs, after a fall or under e-stop)."""
-    reply = rt.worker.submit(Teleop(body.vx, body.vy, body.yaw_rate, body.source))
-    raise_if_refused(reply)
-    return reply_json(reply)
+    return _accepted(rt, Teleop(body.vx, body.vy, body.yaw_rate, body.source))
 
 
 @router.post("/teleop/stop")
@@ -222,9 +218,7 @@ def teleop_stop(rt: RuntimeDep) -> dict[str, Any]:
 @router.post("/posture")
 def posture(body: PostureIn, rt: RuntimeDep) -> dict[str, Any]:
     """Stand (the walk-ready stance) or crouch; 409 while walking, running a plan, or under e-stop."""
-    reply = rt.worker.submit(SetPosture(body.posture))
-    raise_if_refused(reply)
-    return reply_json(reply)
+    return _accepted(rt, SetPosture(body.posture))
 
 
 class ObstacleIn(BaseModel):
@@ -238,14 +232,10 @@ class ObstacleIn(BaseModel):
 @router.post("/sim/obstacles", status_code=202)
 def place_obstacle(body: ObstacleIn, rt: RuntimeDep) -> dict[str, Any]:
     """Simulation: drop an obstacle into the world (e.g. across the robot's path, to see it replan)."""
-    reply = rt.worker.submit(PlaceObstacle(body.x, body.y))
-    raise_if_refused(reply)
-    return reply_json(reply)
+    return _accepted(rt, PlaceObstacle(body.x, body.y))
 
 
 @router.post("/reset")
 def reset(rt: RuntimeDep) -> dict[str, Any]:
     """Simulation: put the robot back standing at its start pose (after a fall); 501 on hardware."""
-    reply = rt.worker.submit(ResetRobot())
-    raise_if_refused(reply)
-    return reply_json(reply)
+    return _accepted(rt, ResetRobot())

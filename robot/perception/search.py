@@ -9,7 +9,7 @@ been seen in a frame taken after the head stopped moving, or the whole room has 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -76,16 +76,9 @@ def find_object(name: str, body: SearchBody, believed_at: tuple[float, float, fl
             body.look_at(believed_at)
         if found := look():
             return SearchResult(found, views, turned)
-    for turn in (0.0, *BODY_TURNS):
-        if turn:
-            check_cancelled()
-            body.turn_in_place(turn)
-            turned += turn
-        for pan, tilt in SWEEP:
-            check_cancelled()
-            body.point_head(pan, tilt)
-            if found := look():
-                return SearchResult(found, views, turned)
+    for turned in _sweep(body, check_cancelled):
+        if found := look():
+            return SearchResult(found, views, turned)
     raise ObjectNotFound(
         f"{name} not found: looked in {views} directions"
         + (f" and turned {math.degrees(turned):.0f} deg" if turned else "")
@@ -104,9 +97,29 @@ def look_around(body: SearchBody, check_cancelled: Callable[[], None]) -> LookRe
     confident detection. The world memory takes in what the frames show as they arrive; this says what was seen."""
     seen: dict[str, DetectedObject] = {}
     views = 0
+    for _ in _sweep(body, check_cancelled):
+        views += 1
+        for _ in range(FRAMES_PER_VIEW):
+            for detection in body.fresh_detections():
+                known = seen.get(detection.label)
+                if detection.confidence >= MIN_CONFIDENCE and (
+                    known is None or detection.distance_m < known.distance_m
+                ):
+                    seen[detection.label] = detection
+    turned = sum(BODY_TURNS)
+    back = math.tau - turned  # the rest of the full turn: face the way the robot started
+    if back > 1e-3:
+        check_cancelled()
+        body.turn_in_place(math.remainder(back, math.tau))
+    body.point_head(0.0, SWEEP[0][1])
+    return LookResult(seen, views, turned)
+
+
+def _sweep(body: SearchBody, check_cancelled: Callable[[], None]) -> Iterator[float]:
+    """Aim the head at every view of the sweep, at each body heading in turn; yields the body's turn so far once
+    the head is there."""
     turned = 0.0
-    turns = (0.0, *BODY_TURNS)
-    for turn in turns:
+    for turn in (0.0, *BODY_TURNS):
         if turn:
             check_cancelled()
             body.turn_in_place(turn)
@@ -114,17 +127,4 @@ def look_around(body: SearchBody, check_cancelled: Callable[[], None]) -> LookRe
         for pan, tilt in SWEEP:
             check_cancelled()
             body.point_head(pan, tilt)
-            views += 1
-            for _ in range(FRAMES_PER_VIEW):
-                for detection in body.fresh_detections():
-                    known = seen.get(detection.label)
-                    if detection.confidence >= MIN_CONFIDENCE and (
-                        known is None or detection.distance_m < known.distance_m
-                    ):
-                        seen[detection.label] = detection
-    back = math.tau - turned  # the rest of the full turn: face the way the robot started
-    if back > 1e-3:
-        check_cancelled()
-        body.turn_in_place(math.remainder(back, math.tau))
-    body.point_head(0.0, SWEEP[0][1])
-    return LookResult(seen, views, turned)
+            yield turned

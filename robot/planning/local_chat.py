@@ -7,6 +7,7 @@ constrained by a grammar built from the plan's JSON schema, so a small model sti
 from __future__ import annotations
 
 import threading
+import time
 from pathlib import Path
 from typing import Any
 
@@ -17,7 +18,14 @@ from robot.planning.prompt import Message
 class LocalChat:
     name = "local"
 
-    def __init__(self, model_path: str, n_ctx: int = 4096, n_threads: int | None = None, max_tokens: int = 512):
+    def __init__(
+        self,
+        model_path: str,
+        n_ctx: int = 4096,
+        n_threads: int | None = None,
+        max_tokens: int = 512,
+        timeout_s: float = 20.0,
+    ) -> None:
         path = Path(model_path).expanduser()
         if not model_path or not path.is_file():
             raise PlanningError(f"local model file not found: {model_path!r} (set HUMANOID_LOCAL_MODEL_PATH to a GGUF)")
@@ -29,6 +37,7 @@ class LocalChat:
             ) from exc
         self.model_path = path
         self.max_tokens = max_tokens
+        self.timeout_s = timeout_s
         self._llama = llama_cpp.Llama(model_path=str(path), n_ctx=n_ctx, n_threads=n_threads, verbose=False)
         self._lock = threading.Lock()  # one generation at a time: the model holds one context
 
@@ -36,17 +45,28 @@ class LocalChat:
         return f"{self.model_path.name} in-process (llama.cpp)"
 
     def chat(self, messages: list[Message], schema: dict[str, Any]) -> str:
+        """Streams the reply so that a model that rambles is stopped at `timeout_s`, as a server's would be."""
+        parts: list[str] = []
         with self._lock:
+            deadline = time.monotonic() + self.timeout_s
             try:
-                response = self._llama.create_chat_completion(
+                stream = self._llama.create_chat_completion(
                     messages=messages,  # type: ignore[arg-type]
                     response_format={"type": "json_object", "schema": schema},
                     temperature=0.0,
                     max_tokens=self.max_tokens,
+                    stream=True,
                 )
+                for chunk in stream:
+                    parts.append(chunk["choices"][0]["delta"].get("content") or "")  # type: ignore[index]
+                    if time.monotonic() > deadline:
+                        stream.close()  # type: ignore[union-attr]
+                        raise PlanningError(f"the local model timed out after {self.timeout_s:g} s")
+            except PlanningError:
+                raise
             except Exception as exc:  # llama.cpp reports context overflow and the like as plain exceptions
                 raise PlanningError(f"the local model failed: {exc}") from exc
-        content = response["choices"][0]["message"].get("content")  # type: ignore[index]
-        if not content:
+        content = "".join(parts)
+        if not content.strip():
             raise PlanningError("the local model returned an empty message")
         return content

@@ -29,6 +29,7 @@ class PlannerConfig:
     openai_response_format: Literal["auto", "json_schema", "json_object", "none"] = "auto"
     local_model_path: str = ""
     local_threads: int | None = None
+    local_timeout_s: float = 20.0
     max_repairs: int = 1  # re-asks of an LLM whose plan does not validate, with the errors
     fallback_to_rules: bool = True
 
@@ -130,5 +131,6 @@ def build_llm_planner(config: PlannerConfig) -> Planner:
     if config.backend == "local":
         from robot.planning.local_chat import LocalChat
 
-        return LLMPlanner(LocalChat(config.local_model_path, n_threads=config.local_threads), config.max_repairs)
+        chat = LocalChat(config.local_model_path, n_threads=config.local_threads, timeout_s=config.local_timeout_s)
+        return LLMPlanner(chat, config.max_repairs)
     raise PlanningError(f"unknown planner backend {config.backend!r} (known: {', '.join(BACKENDS)})")

@@ -141,3 +141,14 @@ def test_the_local_backend_runs_the_same_model_in_process(model_path: Path, cont
     jsonschema.validate(parse_plan_text(answer), flat_plan_schema())
     result = pipeline.plan("go to the charging dock", context)
     assert result.backend == "local" and result.plan.steps
+
+
+def test_a_local_model_that_takes_too_long_is_stopped_with_a_reason(model_path: Path, context) -> None:
+    _require("llama_cpp")
+    from robot.planning.local_chat import LocalChat
+
+    chat = LocalChat(str(model_path), n_threads=2, timeout_s=0.05)
+    started = time.monotonic()
+    with pytest.raises(PlanningError, match=r"the local model timed out after 0\.05 s"):
+        chat.chat(prompt.messages("bring the red mug to the living-room table", context), flat_plan_schema())
+    assert time.monotonic() - started < 15.0  # the prompt is read, then the first tokens stop it
