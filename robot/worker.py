@@ -1150,6 +1150,13 @@ class RobotWorker:
                 self._wait_arm_finished(job.cancel)
             failure, _ = _failure_of(job)
             with self._lock:
+                if result == PlanState.PAUSED and (self._estop_latched or self._fallen):
+                    # an e-stop or a fall came with the pause: nothing is left to resume
+                    result = PlanState.CANCELLED
+                    job.status = replace(job.status, steps=tuple(
+                        replace(s, state=StepState.CANCELLED, detail="cancelled by e-stop")
+                        if s.state in (StepState.PAUSED, StepState.PENDING) else s for s in job.status.steps
+                    ))  # fmt: skip
                 # the state says a replan is coming, so nobody waiting for the command's end stops here
                 replans_left = self._auto_replans.get(job.status.command_id, 0) < self.max_auto_replans
                 job.status = replace(job.status, state=result, replanning=result == PlanState.FAILED and replans_left)

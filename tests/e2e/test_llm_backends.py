@@ -68,6 +68,8 @@ def server(model_path: Path, tmp_path_factory) -> Iterator[str]:
         [sys.executable, "-m", "llama_cpp.server", "--model", str(model_path), "--host", "127.0.0.1",
          "--port", str(port), "--n_ctx", "4096", "--n_threads", "2"],
         stdout=log, stderr=subprocess.STDOUT,
+        # its settings read HOST and PORT from the environment over its own options, and `make` exports ours
+        env={k: v for k, v in os.environ.items() if k not in ("HOST", "PORT")},
     )  # fmt: skip
     url = f"http://127.0.0.1:{port}/v1"
     deadline = time.monotonic() + SERVER_START_TIMEOUT_S

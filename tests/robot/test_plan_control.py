@@ -7,10 +7,12 @@ import time
 from robot.interface import (
     ApprovePlan,
     CancelPlan,
+    EStop,
     ExecutePlan,
     PausePlan,
     PlanState,
     Refusal,
+    ReleaseEStop,
     ResumePlan,
     RunCommand,
     SetApproval,
@@ -110,4 +112,18 @@ def test_a_new_command_discards_a_paused_plan(make_worker) -> None:
     second = worker.submit(RunCommand("say hi"))
     assert worker.wait_for(succeeded(second.command_id), 10.0)  # fmt: skip
     assert first.command_id != second.command_id
+    assert worker.submit(ResumePlan()).refusal == Refusal.NOTHING_TO_DO
+
+
+def test_an_estop_with_a_pause_leaves_nothing_to_resume(make_worker) -> None:
+    worker = make_worker(realtime=True)
+    worker.submit(ExecutePlan({"steps": [{"action": "wait", "seconds": 5}, {"action": "say", "text": "later"}]}))
+    assert worker.wait_for(lambda s: s.plan is not None and s.plan.steps[0].state == StepState.RUNNING, 10.0)
+    worker.submit(PausePlan())
+    worker.submit(EStop(source="test"))
+    assert worker.wait_for(lambda s: s.plan.state in (PlanState.CANCELLED, PlanState.PAUSED) and s.estop_latched, 5.0)
+    time.sleep(0.2)
+    assert worker.state().plan.state == PlanState.CANCELLED
+    assert worker.submit(ResumePlan()).refusal == Refusal.ESTOP_LATCHED
+    worker.submit(ReleaseEStop(source="test"))
     assert worker.submit(ResumePlan()).refusal == Refusal.NOTHING_TO_DO
