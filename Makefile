@@ -8,7 +8,7 @@ HOST ?= 127.0.0.1
 PORT ?= 8000
 export HOST PORT
 
-RUN_DEBS := libgl1 libegl1 libportaudio2
+RUN_DEBS := libgl1 libegl1 libportaudio2 espeak-ng
 TEST_DEBS := $(RUN_DEBS) chromium
 
 .PHONY: run test lint bench setup setup-test deps-run deps-test clean

@@ -1,4 +1,4 @@
-"""The `humanoid` command: serve, run, plan, estop, db upgrade, bench."""
+"""The `humanoid` command: serve, run, transcribe, plan, estop, db upgrade, bench."""
 
 from __future__ import annotations
 
@@ -29,10 +29,67 @@ def _serve(args: argparse.Namespace, settings: Settings) -> int:
     return 0
 
 
+def _transcribe_file(path: str, engine: str | None, seed: int, settings: Settings) -> dict:
+    """Transcribe an audio file with the world's command grammar; the result as JSON-ready data."""
+    from robot.model.world import generate_world
+    from robot.planning.world_context import WorldContext
+    from robot.speech.audio import read_audio
+    from robot.speech.engines import build_recognizer
+
+    world = WorldContext.from_layout(generate_world(seed))
+    recognizer = build_recognizer(engine or settings.asr_engine, world.objects, world.places,
+                                  settings.whisper_model_dir)  # fmt: skip
+    transcript = recognizer.transcribe(read_audio(path))
+    return {
+        "text": transcript.text,
+        "confidence": round(transcript.confidence, 3),
+        "engine": transcript.engine,
+        "in_grammar": transcript.in_grammar,
+        "audio_s": round(transcript.audio_s, 3),
+        "decode_ms": round(transcript.decode_s * 1000, 1),
+    }
+
+
+def _transcribe(args: argparse.Namespace, settings: Settings) -> int:
+    from robot.speech.asr import ASRError
+    from robot.speech.audio import AudioError
+
+    try:
+        result = _transcribe_file(args.file, args.engine, args.seed, settings)
+    except (AudioError, ASRError) as exc:
+        print(f"cannot transcribe: {exc}", file=sys.stderr)
+        return 2
+    if args.json:
+        print(json.dumps(result, indent=2))
+    else:
+        print(f"{result['text']!r} (confidence {result['confidence']:.2f}, {result['engine']}, "
+              f"{result['decode_ms']:.0f} ms for {result['audio_s']:.1f} s)")  # fmt: skip
+    return 0 if result["text"] else 1
+
+
 def _run(args: argparse.Namespace, settings: Settings) -> int:
     from app.headless import run_command
 
+    heard = None
+    if args.audio:
+        from robot.speech.asr import ASRError
+        from robot.speech.audio import AudioError
+
+        try:
+            heard = _transcribe_file(args.audio, None, args.seed, settings)
+        except (AudioError, ASRError) as exc:
+            print(f"cannot transcribe {args.audio}: {exc}", file=sys.stderr)
+            return 2
+        if not heard["text"]:
+            print(f"nothing recognised in {args.audio}", file=sys.stderr)
+            return 1
+        args.text = heard["text"]
+    if not args.text:
+        print("give a command, or --audio FILE.wav", file=sys.stderr)
+        return 2
     result = run_command(args.text, seed=args.seed, settings=settings, timeout_s=args.timeout)
+    if heard is not None:
+        result["speech"] = {**heard, "file": args.audio}
     if args.json:
         print(json.dumps(result, indent=2))
     else:
@@ -130,11 +187,20 @@ def build_parser() -> argparse.ArgumentParser:
     serve.set_defaults(func=_serve)
 
     run = sub.add_parser("run", help="run one command headless in simulation and print the result")
-    run.add_argument("text", help='e.g. "pick up the red mug from the kitchen counter"')
+    run.add_argument("text", nargs="?", default="", help='e.g. "pick up the red mug from the kitchen counter"')
+    run.add_argument("--audio", default=None, help="a spoken command (WAV; other formats with PyAV) instead of text")
     run.add_argument("--seed", type=int, default=0)
     run.add_argument("--json", action="store_true", help="print the result as JSON")
     run.add_argument("--timeout", type=float, default=300.0, help="wall-clock limit in seconds")
     run.set_defaults(func=_run)
+
+    transcribe = sub.add_parser("transcribe", help="speech to text with the world's command grammar")
+    transcribe.add_argument("file", help="a WAV file (other formats with PyAV)")
+    transcribe.add_argument("--engine", choices=["pocketsphinx", "whisper"], default=None,
+                            help="recogniser (default: HUMANOID_ASR_ENGINE, else pocketsphinx)")  # fmt: skip
+    transcribe.add_argument("--seed", type=int, default=0, help="world seed (its objects and places are listened for)")
+    transcribe.add_argument("--json", action="store_true", help='print {"text": ..., "confidence": ...}')
+    transcribe.set_defaults(func=_transcribe)
 
     plan = sub.add_parser("plan", help="print the validated plan for a command, without moving the robot")
     plan.add_argument("text", help='e.g. "bring the red mug to the living-room table"')
@@ -155,7 +221,7 @@ def build_parser() -> argparse.ArgumentParser:
     db_sub.add_parser("upgrade", help="apply pending migrations").set_defaults(func=_db)
 
     bench = sub.add_parser("bench", help="benchmarks, written as JSON")
-    bench.add_argument("suite", choices=["core", "walk", "perception", "capstone", "planner"])
+    bench.add_argument("suite", choices=["core", "walk", "perception", "capstone", "planner", "voice"])
     bench.add_argument("--json", action="store_true", help="print the JSON result")
     bench.add_argument("--output", default=None, help="also write the JSON result to this file")
     bench.add_argument("--presses", type=int, default=100, help="e-stop presses to time")

@@ -61,6 +61,10 @@ class Settings(BaseSettings):
     max_auto_replans: int = Field(2, ge=0, le=10, description="automatic replans of a command after failed steps")
     approve_plans: bool = Field(False, description="plans wait for the operator's approval before they run")
 
+    # speech
+    asr_engine: Literal["pocketsphinx", "whisper"] = Field("pocketsphinx", description="speech recogniser")
+    whisper_model_dir: str = Field("", description="a faster-whisper (CTranslate2) model directory")
+
     def planner_config(self) -> PlannerConfig:
         return PlannerConfig(
             backend=self.planner_backend,

@@ -43,6 +43,10 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
             print(exc, file=sys.stderr)
             return 2
         result = run_planner(get_settings(), backends, repeat=args.repeat, no_fallback=args.no_fallback)
+    elif suite == "voice":
+        from app.bench.voice import run_voice
+
+        result = run_voice()
     else:  # pragma: no cover - argparse restricts the choices
         raise SystemExit(f"unknown suite {suite}")
     text = json.dumps(result, indent=2)

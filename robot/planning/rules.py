@@ -22,9 +22,10 @@ _FIND = r"(?:find|look for|search for|detect|locate|where is|where s|spot|can yo
 _ARTICLE = r"(?:the |a |an |my |your |that |this |some )?"
 _PRONOUNS = ("it", "that", "this", "that one", "this one", "the object", "them")
 _POLITE = r"^(?:please |robot |hey robot |ok robot |okay robot |now |can you |could you |would you |will you |go and )+"
-_NUMBER_WORDS = {"one": 1, "two": 2, "three": 3, "four": 4, "five": 5, "six": 6, "seven": 7, "eight": 8,
-                 "nine": 9, "ten": 10, "fifteen": 15, "twenty": 20, "thirty": 30, "a few": 3,
-                 "a couple of": 2}  # fmt: skip
+# what `wait` understands, and what speech recognition listens for
+NUMBER_WORDS = {"one": 1, "two": 2, "three": 3, "four": 4, "five": 5, "six": 6, "seven": 7, "eight": 8,
+                "nine": 9, "ten": 10, "fifteen": 15, "twenty": 20, "thirty": 30, "a few": 3,
+                "a couple of": 2}  # fmt: skip
 _STOP = re.compile(
     r"(?:please )?(?:stop|halt|freeze|stand still|stop moving|stop now|cancel|abort|stop everything|"
     r"emergency stop|stop what you are doing|stop it)(?: please| now)?"
@@ -212,8 +213,8 @@ def _last_object(context: PlanningContext) -> str | None:
 
 def _number(text: str) -> float | None:
     text = text.strip()
-    if text in _NUMBER_WORDS:
-        return float(_NUMBER_WORDS[text])
+    if text in NUMBER_WORDS:
+        return float(NUMBER_WORDS[text])
     try:
         return float(text)
     except ValueError:

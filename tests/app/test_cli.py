@@ -127,3 +127,24 @@ def test_bench_planner_measures_the_rules_on_the_paraphrase_suite(tmp_path) -> N
     assert rules["exact_rate"] == 1.0 and rules["wrong"] == [], rules["wrong"]
     assert result["bars"]["rules_exact"]["measured"] == rules["exact_rate"]
     assert set(rules["latency_ms"]) == {"p50", "p99", "max", "mean"}
+
+
+def test_transcribe_prints_text_and_confidence_and_run_takes_a_spoken_command(tmp_path) -> None:
+    from robot.speech.tts import synthesize
+
+    wav = tmp_path / "command.wav"
+    wav.write_bytes(synthesize("wait for three seconds", "en-us", 160))
+    done = humanoid(tmp_path, "transcribe", str(wav), "--json")
+    assert done.returncode == 0, done.stderr
+    heard = json.loads(done.stdout)
+    assert heard["text"] == "wait for three seconds" and 0.0 < heard["confidence"] <= 1.0
+    assert heard["engine"] == "pocketsphinx" and heard["in_grammar"] is True
+
+    run = humanoid(tmp_path, "run", "--audio", str(wav), "--json")
+    assert run.returncode == 0, run.stderr
+    result = json.loads(run.stdout)
+    assert result["success"] and result["transcript"] == "wait for three seconds"
+    assert result["speech"]["file"] == str(wav) and result["steps"][0]["detail"] == "waited 3 s"
+
+    missing = humanoid(tmp_path, "transcribe", str(tmp_path / "nope.wav"))
+    assert missing.returncode == 2 and "no such audio file" in missing.stderr

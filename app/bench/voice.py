@@ -1,0 +1,150 @@
+"""`humanoid bench voice`: spoken commands through the recogniser and the planner.
+
+The commands are the planner's paraphrase suite that can be said (not free text to say, not coordinates), spoken by
+espeak-ng in several voices and speeds, clean and with white noise at 10 dB SNR. Reported: word error rate, how
+often the plan from the transcript is right, the recogniser's real-time factor, and the latency from the end of
+speech to a validated plan (decode + plan), p50 target <= 300 ms.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from app.bench.planner_cases import CASES, Case, context_for, plan_matches
+from robot.model.world import generate_world
+from robot.planning.pipeline import PlannerConfig, build_pipeline
+from robot.planning.planner import PlanningError
+from robot.planning.world_context import WorldContext, normalize
+from robot.speech.audio import Audio, add_noise
+from robot.speech.sphinx import PocketSphinxASR
+from robot.speech.tts import synthesize_audio
+
+VOICES = (("en-us", 160), ("en-gb", 175), ("en-us", 140), ("en-gb-x-rp", 150))
+NOISY_SNR_DB = 10.0
+WER_CLEAN_TARGET = 0.10
+WER_NOISY_TARGET = 0.20
+PLAN_RIGHT_TARGET = 0.90
+LATENCY_P50_TARGET_MS = 300.0
+
+
+def spoken_cases() -> tuple[Case, ...]:
+    """The suite's commands a person would say to the robot as they are written."""
+    return tuple(c for c in CASES if not any(s["action"] == "say" and s["text"] != "*" for s in c.plan)
+                 and not any(ch.isdigit() for ch in c.text))  # fmt: skip
+
+
+def word_errors(reference: str, hypothesis: str) -> tuple[int, int]:
+    """(edit distance in words, words in the reference)."""
+    ref, hyp = normalize(reference).split(), normalize(hypothesis).split()
+    row = list(range(len(hyp) + 1))
+    for i, r in enumerate(ref, start=1):
+        previous, row[0] = row[0], i
+        for j, h in enumerate(hyp, start=1):
+            previous, row[j] = row[j], min(row[j] + 1, row[j - 1] + 1, previous + (r != h))
+    return row[len(hyp)], len(ref)
+
+
+@dataclass
+class Trial:
+    text: str
+    voice: str
+    wpm: int
+    snr_db: float | None
+    heard: str
+    confidence: float
+    in_grammar: bool
+    errors: int
+    words: int
+    plan_right: bool
+    decode_ms: float
+    plan_ms: float
+    audio_s: float
+
+
+def run_trials(voices: tuple[tuple[str, int], ...] = VOICES, snrs: tuple[float | None, ...] = (None, NOISY_SNR_DB),
+               cases: tuple[Case, ...] | None = None) -> list[Trial]:  # fmt: skip
+    layout = generate_world(0)
+    world = WorldContext.from_layout(layout)
+    asr = PocketSphinxASR(world.objects, world.places)
+    planner = build_pipeline(PlannerConfig(backend="rules"))
+    trials = []
+    for index, case in enumerate(cases or spoken_cases()):
+        for voice, wpm in voices:
+            clean = synthesize_audio(case.text, voice, wpm)
+            for snr in snrs:
+                audio: Audio = clean if snr is None else add_noise(clean, snr, seed=index)
+                transcript = asr.transcribe(audio)
+                started = time.perf_counter()
+                try:
+                    result = planner.plan(transcript.text, context_for(case, layout)) if transcript.text else None
+                except PlanningError:
+                    result = None
+                plan_ms = (time.perf_counter() - started) * 1000
+                errors, words = word_errors(case.text, transcript.text)
+                right = result is not None and plan_matches(case.plan, result.plan.to_seed_list())
+                trials.append(Trial(case.text, voice, wpm, snr, transcript.text, round(transcript.confidence, 3),
+                                    transcript.in_grammar, errors, words, right, transcript.decode_s * 1000, plan_ms,
+                                    audio.duration_s))  # fmt: skip
+    return trials
+
+
+def summarise(trials: list[Trial]) -> dict[str, Any]:
+    def group(selected: list[Trial]) -> dict[str, Any]:
+        errors = sum(t.errors for t in selected)
+        words = sum(t.words for t in selected)
+        latency = np.asarray([t.decode_ms + t.plan_ms for t in selected])
+        rtf = np.asarray([t.decode_ms / 1000 / t.audio_s for t in selected])
+        return {
+            "utterances": len(selected),
+            "wer": round(errors / words, 4) if words else 0.0,
+            "plan_right": round(sum(t.plan_right for t in selected) / len(selected), 4),
+            "in_grammar": round(sum(t.in_grammar for t in selected) / len(selected), 4),
+            "end_of_speech_to_plan_ms": {
+                "p50": round(float(np.percentile(latency, 50)), 1),
+                "p99": round(float(np.percentile(latency, 99)), 1),
+            },
+            "asr_real_time_factor": {"mean": round(float(rtf.mean()), 4), "max": round(float(rtf.max()), 4)},
+        }
+
+    clean = [t for t in trials if t.snr_db is None]
+    noisy = [t for t in trials if t.snr_db is not None]
+    result: dict[str, Any] = {"clean": group(clean)} if clean else {}
+    if noisy:
+        result["noisy_10db"] = group(noisy)
+    right = [t.confidence for t in trials if t.plan_right]
+    wrong = [t.confidence for t in trials if not t.plan_right]
+    result["confidence"] = {
+        "right_plans_mean": round(float(np.mean(right)), 3) if right else None,
+        "wrong_plans_mean": round(float(np.mean(wrong)), 3) if wrong else None,
+        "wrong_plans_at_or_above_0.6": sum(c >= 0.6 for c in wrong),
+    }
+    return result
+
+
+def run_voice() -> dict[str, Any]:
+    started = time.perf_counter()
+    trials = run_trials()
+    summary = summarise(trials)
+    clean, noisy = summary["clean"], summary.get("noisy_10db", {})
+    latency = clean["end_of_speech_to_plan_ms"]["p50"]
+    plan_right = min(clean["plan_right"], noisy.get("plan_right", 1.0))
+    bars = {
+        "wer_clean": _bar(WER_CLEAN_TARGET, clean["wer"], clean["wer"] <= WER_CLEAN_TARGET),
+        "wer_noisy_10db": _bar(WER_NOISY_TARGET, noisy.get("wer"), noisy.get("wer", 1.0) <= WER_NOISY_TARGET),
+        "plan_right_worst_of_clean_and_noisy": _bar(PLAN_RIGHT_TARGET, plan_right, plan_right >= PLAN_RIGHT_TARGET),
+        "latency_p50_ms": _bar(LATENCY_P50_TARGET_MS, latency, latency <= LATENCY_P50_TARGET_MS),
+    }
+    misheard = [t.__dict__ for t in trials if not t.plan_right][:40]
+    voices = [f"{v}@{w}" for v, w in VOICES]
+    wall_s = round(time.perf_counter() - started, 1)
+    commands = len({t.text for t in trials})
+    return {"suite": "voice", "commands": commands, "voices": voices, "wall_s": wall_s, **summary, "bars": bars,
+            "misheard": misheard}  # fmt: skip
+
+
+def _bar(target: float, measured: float | None, met: bool) -> dict[str, Any]:
+    return {"target": target, "measured": measured, "met": met}

@@ -1,0 +1,1 @@
+"""Speech: recognising spoken commands (ASR engines) and speaking (TTS)."""

@@ -1,0 +1,32 @@
+"""Speech recognition behind one interface: audio in, a transcript with a confidence out."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+from robot.speech.audio import Audio
+
+
+class ASRError(Exception):
+    """The engine cannot run (missing package or model): the message says what to install or set."""
+
+
+@dataclass(frozen=True)
+class Transcript:
+    text: str  # "" when nothing was recognised
+    confidence: float  # 0..1: how sure the engine is (see each engine for what it means)
+    engine: str
+    in_grammar: bool  # a whole sentence of the command grammar (an engine without one says False)
+    audio_s: float
+    decode_s: float
+
+    @property
+    def real_time_factor(self) -> float:
+        return self.decode_s / self.audio_s if self.audio_s > 0 else 0.0
+
+
+class SpeechRecognizer(Protocol):
+    name: str
+
+    def transcribe(self, audio: Audio) -> Transcript: ...
