@@ -65,20 +65,20 @@ def _step_schema(action: str, spec: ActionSpec) -> dict[str, Any]:
     }
 
 
+def _steps_object(step: dict[str, Any], max_steps: int) -> dict[str, Any]:
+    """`{"steps": [step, ...]}` with 1 to `max_steps` steps."""
+    return {
+        "type": "object",
+        "additionalProperties": False,
+        "required": ["steps"],
+        "properties": {"steps": {"type": "array", "minItems": 1, "maxItems": max_steps, "items": step}},
+    }
+
+
 PLAN_SCHEMA: dict[str, Any] = {
     "$schema": "https://json-schema.org/draft/2020-12/schema",
     "title": "Plan",
-    "type": "object",
-    "additionalProperties": False,
-    "required": ["steps"],
-    "properties": {
-        "steps": {
-            "type": "array",
-            "minItems": 1,
-            "maxItems": MAX_STEPS,
-            "items": {"oneOf": [_step_schema(a, spec) for a, spec in ACTIONS.items()]},
-        }
-    },
+    **_steps_object({"oneOf": [_step_schema(a, spec) for a, spec in ACTIONS.items()]}, MAX_STEPS),
 }
 
 
@@ -89,27 +89,16 @@ def flat_plan_schema(max_steps: int = MAX_STEPS) -> dict[str, Any]:
     vocabulary and optional string arguments; the validator then checks which arguments each action needs.
     """
     arg_names = sorted({arg for spec in ACTIONS.values() for arg in spec.args})
-    return {
+    step = {
         "type": "object",
         "additionalProperties": False,
-        "required": ["steps"],
+        "required": ["action"],
         "properties": {
-            "steps": {
-                "type": "array",
-                "minItems": 1,
-                "maxItems": max_steps,
-                "items": {
-                    "type": "object",
-                    "additionalProperties": False,
-                    "required": ["action"],
-                    "properties": {
-                        "action": {"type": "string", "enum": list(ACTIONS)},
-                        **{arg: {"type": "string"} for arg in arg_names},
-                    },
-                },
-            }
+            "action": {"type": "string", "enum": list(ACTIONS)},
+            **{a: {"type": "string"} for a in arg_names},
         },
     }
+    return _steps_object(step, max_steps)
 
 
 _VALIDATOR = jsonschema.Draft202012Validator(PLAN_SCHEMA)
