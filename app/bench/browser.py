@@ -27,8 +27,13 @@ def chromium_path() -> str:
     return path
 
 
-def launch_chromium(playwright: Any) -> Any:
-    return playwright.chromium.launch(executable_path=chromium_path(), args=CHROMIUM_ARGS, headless=True)
+def launch_chromium(playwright: Any, microphone_wav: str | None = None) -> Any:
+    """Debian's Chromium, headless; with `microphone_wav`, a fake microphone that plays that file (in a loop)."""
+    args = list(CHROMIUM_ARGS)
+    if microphone_wav is not None:
+        args += ["--use-fake-ui-for-media-stream", "--use-fake-device-for-media-stream",
+                 f"--use-file-for-fake-audio-capture={microphone_wav}"]  # fmt: skip
+    return playwright.chromium.launch(executable_path=chromium_path(), args=args, headless=True)
 
 
 def wait_for_scene_render(page: Any, timeout_s: float = 90.0) -> float:

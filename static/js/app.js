@@ -71,7 +71,12 @@ function connect() {
     const m = JSON.parse(msg.data);
     if (m.type === "state") renderState(m.state);
     else if (m.type === "event") addEvent(m.event);
-    else if (m.type === "hello") { $("events").innerHTML = ""; m.recent_events.forEach(addEvent); }
+    else if (m.type === "hello") {
+      $("events").innerHTML = "";
+      humanoid.connectedAt = null;
+      m.recent_events.forEach(addEvent);
+      humanoid.connectedAt = Date.now() / 1000 - 1;
+    }
     else if (m.type === "estop_release_ack" && !m.accepted) showResult(m.message, true);
     else if (m.type === "teleop_ack" && humanoid.onTeleopAck) humanoid.onTeleopAck(m);
   };
@@ -243,6 +248,9 @@ function renderPlan(plan) {
 
 function addEvent(e) {
   humanoid.events.push(e);
+  if (e.kind === "speech/say" && humanoid.onSay && humanoid.connectedAt && e.wall_time_s > humanoid.connectedAt) {
+    humanoid.onSay(e.data.text || e.message);  // new ones only: not the history sent on connecting
+  }
   if (e.kind === "plan/created") {
     // who planned it, how long it took, and why the configured planner's plan was not used as it came
     const d = e.data;

@@ -184,7 +184,8 @@ def test_teleop_posture_and_reset_endpoints(client) -> None:
     assert client.post("/api/posture", json={"posture": "crouch"}).status_code == 409
     assert client.post("/api/teleop/stop").json()["accepted"]
     worker = client.runtime.worker
-    assert worker.wait_for(lambda s: s.mode.value == "idle", 5.0)
+    # teleop ends at once; the walk takes its last steps (a posture change is refused until it stands)
+    assert worker.wait_for(lambda s: s.mode.value == "idle" and s.locomotion.phase == "standing", 10.0)
     assert client.post("/api/posture", json={"posture": "sit"}).status_code == 422
     assert client.post("/api/posture", json={"posture": "crouch"}).status_code == 200
     assert worker.wait_for(lambda s: s.locomotion.posture == "crouch", 5.0)
@@ -228,3 +229,29 @@ def test_plans_can_wait_for_approval_be_approved_paused_and_resumed(client) -> N
 def test_config_says_which_planner_plans(client) -> None:
     config = client.get("/api/config").json()
     assert config["planner_backend"] == "rules" and config["planner"].startswith("rules")
+
+
+def test_speech_is_transcribed_from_wav_or_raw_pcm_and_bad_audio_is_refused(client) -> None:
+    from robot.speech.tts import synthesize, synthesize_audio
+
+    wav = synthesize("go to the charging dock", "en-us", 160)
+    heard = client.post("/api/speech/transcribe", content=wav, headers={"Content-Type": "audio/wav"}).json()
+    assert heard["text"] == "go to the charging dock" and heard["in_grammar"] is True
+    assert set(heard) >= {"confidence", "engine", "audio_s", "decode_ms", "auto_run"}
+    pcm = synthesize_audio("find the green apple", "en-us", 160).pcm()
+    raw = client.post("/api/speech/transcribe", content=pcm, headers={"Content-Type": "audio/L16; rate=16000"})
+    assert raw.json()["text"] == "find the green apple"
+    assert client.post("/api/speech/transcribe", content=b"not audio").status_code == 422
+    short = client.post("/api/speech/transcribe", content=pcm[:3200], headers={"Content-Type": "audio/L16; rate=16000"})
+    assert short.status_code == 422 and "shorter than 0.2 s" in short.json()["detail"]["message"]
+    odd = client.post("/api/speech/transcribe", content=pcm[:3201], headers={"Content-Type": "audio/L16; rate=16000"})
+    assert odd.status_code == 422
+    assert client.post("/api/speech/transcribe", content=b"\0" * (1024 * 1024 + 2)).status_code == 413
+    assert client.post("/api/commands", content=b"x" * (65 * 1024)).status_code == 413  # other routes keep 64 KiB
+
+
+def test_the_robots_sentences_are_served_as_speech(client) -> None:
+    spoken = client.get("/api/speech/say.wav", params={"text": "I have picked up the red mug."})
+    assert spoken.status_code == 200 and spoken.headers["content-type"] == "audio/wav"
+    assert spoken.content[:4] == b"RIFF" and len(spoken.content) > 20_000
+    assert client.get("/api/speech/say.wav", params={"text": ""}).status_code == 422

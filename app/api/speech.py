@@ -1,0 +1,90 @@
+"""Speech for the page: a push-to-talk recording in, its transcript out; a sentence in, spoken WAV out."""
+
+from __future__ import annotations
+
+import threading
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Depends, HTTPException, Query, Request, Response
+
+from app.api.deps import runtime
+from app.runtime import Runtime
+from robot.model.world import generate_world
+from robot.planning.world_context import WorldContext
+from robot.speech.asr import ASRError, SpeechRecognizer
+from robot.speech.audio import AudioError, from_pcm16, read_wav_bytes
+from robot.speech.engines import build_recognizer
+from robot.speech.sphinx import AUTO_RUN_CONFIDENCE
+from robot.speech.tts import MAX_TEXT_CHARS, TTSError, synthesize
+
+router = APIRouter(prefix="/api/speech", tags=["speech"])
+RuntimeDep = Annotated[Runtime, Depends(runtime)]
+MAX_AUDIO_BYTES = 1024 * 1024  # 32 s of 16 kHz 16-bit speech: a command, not a speech
+
+_recognizers: dict[tuple[str, int], SpeechRecognizer] = {}
+_recognizers_lock = threading.Lock()
+
+
+def recognizer(rt: Runtime) -> SpeechRecognizer:
+    """One recogniser per engine and world (building the grammar and decoders takes ~0.3 s)."""
+    key = (rt.settings.asr_engine, rt.settings.seed)
+    with _recognizers_lock:
+        if key not in _recognizers:
+            world = WorldContext.from_layout(generate_world(rt.settings.seed))
+            _recognizers[key] = build_recognizer(rt.settings.asr_engine, world.objects, world.places,
+                                                 rt.settings.whisper_model_dir)  # fmt: skip
+        return _recognizers[key]
+
+
+@router.post("/transcribe")
+async def transcribe(request: Request, rt: RuntimeDep) -> dict[str, Any]:
+    """The body is a WAV file, or raw 16-bit little-endian PCM (`Content-Type: audio/L16; rate=16000`, as the
+    page's push-to-talk sends). 422 for audio that cannot be read; 503 when the engine cannot run."""
+    body = await request.body()
+    content_type = request.headers.get("content-type", "").lower()
+    try:
+        if content_type.startswith("audio/l16"):
+            rate = _rate(content_type)
+            audio = from_pcm16(body, rate)
+        else:
+            audio = read_wav_bytes(body)
+    except AudioError as exc:
+        raise HTTPException(422, detail={"message": f"cannot read the audio: {exc}"}) from exc
+    if audio.duration_s < 0.2:
+        raise HTTPException(
+            422, detail={"message": "the recording is shorter than 0.2 s: hold the button while speaking"}
+        )
+    try:
+        engine = recognizer(rt)
+    except ASRError as exc:
+        raise HTTPException(503, detail={"message": str(exc)}) from exc
+    transcript = engine.transcribe(audio)
+    return {
+        "text": transcript.text,
+        "confidence": round(transcript.confidence, 3),
+        "in_grammar": transcript.in_grammar,
+        "engine": transcript.engine,
+        "audio_s": round(transcript.audio_s, 3),
+        "decode_ms": round(transcript.decode_s * 1000, 1),
+        # the page runs it without asking when its operator allows that and the recogniser is this sure
+        "auto_run": bool(transcript.text) and transcript.in_grammar and transcript.confidence >= AUTO_RUN_CONFIDENCE,
+    }
+
+
+@router.get("/say.wav")
+def say(text: Annotated[str, Query(min_length=1, max_length=MAX_TEXT_CHARS)]) -> Response:
+    """The sentence spoken by espeak-ng, as WAV (the page plays the robot's `say` steps with it)."""
+    try:
+        return Response(synthesize(text), media_type="audio/wav", headers={"Cache-Control": "max-age=3600"})
+    except TTSError as exc:
+        raise HTTPException(503 if "not installed" in str(exc) else 422, detail={"message": str(exc)}) from exc
+
+
+def _rate(content_type: str) -> int:
+    for part in content_type.split(";")[1:]:
+        key, _, value = part.strip().partition("=")
+        if key == "rate":
+            if not value.isdigit() or not 8000 <= int(value) <= 96000:
+                raise AudioError(f"unsupported sample rate {value!r}")
+            return int(value)
+    return 16000
