@@ -87,7 +87,12 @@ def _run(args: argparse.Namespace, settings: Settings) -> int:
     if not args.text:
         print("give a command, or --audio FILE.wav", file=sys.stderr)
         return 2
-    result = run_command(args.text, seed=args.seed, settings=settings, timeout_s=args.timeout)
+    recording = None
+    if heard is not None:
+        from robot.speech.audio import read_audio
+
+        recording = (heard, read_audio(args.audio).wav_bytes())
+    result = run_command(args.text, seed=args.seed, settings=settings, timeout_s=args.timeout, heard=recording)
     if heard is not None:
         result["speech"] = {**heard, "file": args.audio}
     if args.json:

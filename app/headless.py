@@ -5,6 +5,7 @@ from __future__ import annotations
 import time
 from typing import Any
 
+from app.sessions.audio_store import save_recording
 from app.sessions.db import make_engine, make_session_factory, upgrade_to_head
 from app.sessions.recorder import SessionRecorder
 from app.settings import Settings
@@ -15,8 +16,15 @@ from robot.worker import RobotWorker
 SETTLE_SIM_S = 0.5  # let the robot settle on its feet before the command, as an operator would
 
 
-def run_command(text: str, seed: int, settings: Settings, timeout_s: float = 300.0) -> dict[str, Any]:
-    """Plan and execute `text` in a fresh simulation; returns the result the CLI prints."""
+def run_command(
+    text: str,
+    seed: int,
+    settings: Settings,
+    timeout_s: float = 300.0,
+    heard: tuple[dict[str, Any], bytes] | None = None,
+) -> dict[str, Any]:
+    """Plan and execute `text` in a fresh simulation; returns the result the CLI prints. `heard`: the transcript
+    `text` came from and its recording (WAV), kept with the session."""
     upgrade_to_head(settings.database_url)
     engine = make_engine(settings.database_url)
     worker = RobotWorker(generate_world(seed), realtime=False, control_hz=settings.control_hz,
@@ -27,8 +35,11 @@ def run_command(text: str, seed: int, settings: Settings, timeout_s: float = 300
     worker.start()
     try:
         worker.wait_for(lambda s: s.sim_time_s >= SETTLE_SIM_S, timeout_s)
+        if heard is not None:
+            transcript, wav = heard
+            recorder.record_transcript(transcript, "cli", save_recording(settings.audio_dir, recorder.session_id, wav))
         reply = worker.submit(RunCommand(text))
-        recorder.record_command(text, "cli", reply)
+        recorder.record_command(text, "cli-audio" if heard else "cli", reply)
         finished = reply.accepted and worker.wait_for(
             lambda s: (
                 s.plan is not None

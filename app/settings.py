@@ -64,6 +64,7 @@ class Settings(BaseSettings):
     # speech
     asr_engine: Literal["pocketsphinx", "whisper"] = Field("pocketsphinx", description="speech recogniser")
     whisper_model_dir: str = Field("", description="a faster-whisper (CTranslate2) model directory")
+    audio_dir: str = Field(str(REPO_ROOT / "data" / "audio"), description="where recordings are kept, by session")
 
     def planner_config(self) -> PlannerConfig:
         return PlannerConfig(

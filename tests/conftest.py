@@ -48,7 +48,9 @@ def make_worker(layout: WorldLayout, scene_model: mujoco.MjModel) -> Iterator:
 
 @pytest.fixture
 def settings(tmp_path: Path) -> Settings:
-    return Settings(database_url=f"sqlite:///{tmp_path / 'test.db'}", enable_mirror=False, seed=0)
+    return Settings(
+        database_url=f"sqlite:///{tmp_path / 'test.db'}", enable_mirror=False, seed=0, audio_dir=str(tmp_path / "audio")
+    )
 
 
 @pytest.fixture

@@ -9,6 +9,7 @@ from fastapi import APIRouter, Depends, HTTPException, Query, Request, Response
 
 from app.api.deps import runtime
 from app.runtime import Runtime
+from app.sessions.audio_store import save_recording
 from robot.model.world import generate_world
 from robot.planning.world_context import WorldContext
 from robot.speech.asr import ASRError, SpeechRecognizer
@@ -59,7 +60,7 @@ async def transcribe(request: Request, rt: RuntimeDep) -> dict[str, Any]:
     except ASRError as exc:
         raise HTTPException(503, detail={"message": str(exc)}) from exc
     transcript = engine.transcribe(audio)
-    return {
+    heard = {
         "text": transcript.text,
         "confidence": round(transcript.confidence, 3),
         "in_grammar": transcript.in_grammar,
@@ -69,6 +70,10 @@ async def transcribe(request: Request, rt: RuntimeDep) -> dict[str, Any]:
         # the page runs it without asking when its operator allows that and the recogniser is this sure
         "auto_run": bool(transcript.text) and transcript.in_grammar and transcript.confidence >= AUTO_RUN_CONFIDENCE,
     }
+    # kept with the session, recording included: what the operator said is never lost
+    path = save_recording(rt.settings.audio_dir, rt.recorder.session_id, audio.wav_bytes())
+    rt.recorder.record_transcript(heard, "browser", path)
+    return heard
 
 
 @router.get("/say.wav")

@@ -35,6 +35,7 @@ class ServerProcess:
         self._env = {
             **os.environ,
             "DATABASE_URL": f"sqlite:///{self.workdir / 'server.db'}",
+            "HUMANOID_AUDIO_DIR": str(self.workdir / "audio"),
             "HUMANOID_VISER_LIGHT_PORT": str(self.viser_light_port),
             **(extra_env or {}),
         }

@@ -89,6 +89,25 @@ class EventRow(Base):
     sim_time_s: Mapped[float] = mapped_column(Float)
 
 
+class TranscriptRow(Base):
+    """What was heard: the transcript, how sure the recogniser was, and the recording (a WAV under the audio
+    directory, by a path relative to it)."""
+
+    __tablename__ = "transcripts"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    session_id: Mapped[int] = mapped_column(ForeignKey("sessions.id", ondelete="CASCADE"), index=True)
+    received_at: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+    source: Mapped[str] = mapped_column(String(16))  # browser | cli | robot_mic
+    text: Mapped[str] = mapped_column(Text)
+    confidence: Mapped[float] = mapped_column(Float)
+    engine: Mapped[str] = mapped_column(String(32))
+    in_grammar: Mapped[bool] = mapped_column(Boolean)
+    audio_s: Mapped[float] = mapped_column(Float)
+    decode_ms: Mapped[float] = mapped_column(Float)
+    audio_path: Mapped[str | None] = mapped_column(String(512))
+
+
 class StateSampleRow(Base):
     __tablename__ = "state_samples"
 

@@ -7,7 +7,7 @@ from typing import Any
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
-from app.sessions.models import CommandRow, EventRow, PlanRow, SessionRow, StateSampleRow, StepResultRow
+from app.sessions.models import CommandRow, EventRow, PlanRow, SessionRow, StateSampleRow, StepResultRow, TranscriptRow
 
 
 def _iso(value: Any) -> str | None:
@@ -61,6 +61,9 @@ def session_detail(db: Session, session_id: int) -> dict[str, Any] | None:
     ).all()
     events = db.scalars(select(EventRow).where(EventRow.session_id == session_id).order_by(EventRow.seq))
     samples = db.scalar(select(func.count(StateSampleRow.id)).where(StateSampleRow.session_id == session_id))
+    transcripts = db.scalars(
+        select(TranscriptRow).where(TranscriptRow.session_id == session_id).order_by(TranscriptRow.id)
+    ).all()
     steps_by_plan: dict[int, list[dict[str, Any]]] = {}
     for s in steps:
         steps_by_plan.setdefault(s.robot_plan_id, []).append(
@@ -86,5 +89,12 @@ def session_detail(db: Session, session_id: int) -> dict[str, Any] | None:
             for p in plans
         ],
         "events": event_list,
+        "transcripts": [
+            {"id": t.id, "received_at": _iso(t.received_at), "source": t.source, "text": t.text,
+             "confidence": t.confidence, "engine": t.engine, "in_grammar": t.in_grammar, "audio_s": t.audio_s,
+             "decode_ms": t.decode_ms,
+             "audio_url": f"/api/sessions/{session_id}/transcripts/{t.id}/audio.wav" if t.audio_path else None}
+            for t in transcripts
+        ],
         "state_sample_count": samples or 0,
     }  # fmt: skip

@@ -14,7 +14,15 @@ from typing import Any
 from sqlalchemy import update
 from sqlalchemy.orm import sessionmaker
 
-from app.sessions.models import CommandRow, EventRow, PlanRow, SessionRow, StateSampleRow, StepResultRow
+from app.sessions.models import (
+    CommandRow,
+    EventRow,
+    PlanRow,
+    SessionRow,
+    StateSampleRow,
+    StepResultRow,
+    TranscriptRow,
+)
 from robot.interface import CommandReply, Event, RobotPort
 
 log = logging.getLogger(__name__)
@@ -81,6 +89,14 @@ class SessionRecorder:
                 errors=list(reply.errors) or None,
             )
         )
+
+    def record_transcript(self, heard: dict[str, Any], source: str, audio_path: str | None) -> None:
+        """What the recogniser heard (`humanoid transcribe`'s fields) and where its recording is kept."""
+        self._pending.put(
+            TranscriptRow(session_id=self.session_id, received_at=_utc(), source=source, text=heard["text"],
+                          confidence=heard["confidence"], engine=heard["engine"], in_grammar=heard["in_grammar"],
+                          audio_s=heard["audio_s"], decode_ms=heard["decode_ms"], audio_path=audio_path)
+        )  # fmt: skip
 
     def close(self, outcome: str | None = None, summary: dict[str, Any] | None = None) -> None:
         """Flush everything, then mark the session ended."""

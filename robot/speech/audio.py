@@ -48,7 +48,7 @@ def from_samples(samples: np.ndarray, rate: int) -> Audio:
     floats = data.astype(np.float64) / 32768.0 if data.dtype == np.int16 else data.astype(np.float64)
     if rate != RATE and len(floats):
         floats = _resample(floats, rate, RATE)
-    return Audio(np.clip(np.round(floats * 32767.0), -32768, 32767).astype(np.int16))
+    return Audio(np.clip(np.round(floats * 32768.0), -32768, 32767).astype(np.int16))  # int16 in: unchanged
 
 
 def from_pcm16(pcm: bytes, rate: int = RATE) -> Audio:

@@ -33,6 +33,21 @@ async function loadDetail(id) {
   const s = await r.json();
   $("detail").hidden = false;
   $("detail-title").textContent = `Session ${s.id} (${s.kind}, seed ${s.seed}), ${s.state_sample_count} state samples`;
+  const transcripts = $("transcripts");
+  transcripts.innerHTML = s.transcripts.length ? "" : '<li class="muted">nothing spoken</li>';
+  for (const t of s.transcripts) {
+    const li = document.createElement("li");
+    li.textContent = `${when(t.received_at)} [${t.source}] "${t.text}" (confidence ${t.confidence.toFixed(2)}, ` +
+      `${t.engine}${t.in_grammar ? "" : ", free speech"}, ${t.audio_s.toFixed(1)} s) `;
+    if (t.audio_url) {
+      const audio = document.createElement("audio");
+      audio.controls = true;
+      audio.preload = "none";
+      audio.src = t.audio_url;
+      li.appendChild(audio);
+    }
+    transcripts.appendChild(li);
+  }
   const commands = $("commands");
   commands.innerHTML = "";
   for (const c of s.commands) {
@@ -51,8 +66,8 @@ async function loadDetail(id) {
     ol.className = "steps";
     for (const st of p.steps) {
       const li = document.createElement("li");
-      const arg = Object.values(st.args)[0];
-      li.textContent = `${st.action}(${arg}): ${st.state}${st.detail ? " (" + st.detail + ")" : ""}`;
+      const args = Object.values(st.args).join(", ");
+      li.textContent = `${st.action}(${args}): ${st.state}${st.detail ? " (" + st.detail + ")" : ""}`;
       ol.appendChild(li);
     }
     div.append(title, ol);

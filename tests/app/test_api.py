@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import time
 
+import numpy as np
 import pytest
 
 
@@ -232,6 +233,7 @@ def test_config_says_which_planner_plans(client) -> None:
 
 
 def test_speech_is_transcribed_from_wav_or_raw_pcm_and_bad_audio_is_refused(client) -> None:
+    from robot.speech.audio import read_wav_bytes
     from robot.speech.tts import synthesize, synthesize_audio
 
     wav = synthesize("go to the charging dock", "en-us", 160)
@@ -248,6 +250,21 @@ def test_speech_is_transcribed_from_wav_or_raw_pcm_and_bad_audio_is_refused(clie
     assert odd.status_code == 422
     assert client.post("/api/speech/transcribe", content=b"\0" * (1024 * 1024 + 2)).status_code == 413
     assert client.post("/api/commands", content=b"x" * (65 * 1024)).status_code == 413  # other routes keep 64 KiB
+
+    # every transcript is kept with the session, its recording too
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline:  # the recorder writes in batches
+        kept = client.get(f"/api/sessions/{client.runtime.recorder.session_id}").json()["transcripts"]
+        if len(kept) == 2:
+            break
+        time.sleep(0.1)
+    assert [t["text"] for t in kept] == ["go to the charging dock", "find the green apple"]
+    assert kept[0]["source"] == "browser" and kept[0]["in_grammar"] is True
+    recording = client.get(kept[1]["audio_url"])
+    assert recording.status_code == 200 and recording.headers["content-type"] == "audio/wav"
+    said = synthesize_audio("find the green apple", "en-us", 160).samples
+    assert np.array_equal(read_wav_bytes(recording.content).samples, said)  # as sent, to the bit
+    assert client.get(kept[1]["audio_url"].replace(f"/{kept[1]['id']}/", "/999/")).status_code == 404
 
 
 def test_the_robots_sentences_are_served_as_speech(client) -> None:

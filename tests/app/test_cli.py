@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import sqlite3
 import subprocess
 import sys
 
@@ -14,7 +15,11 @@ RESULT_KEYS = {"success", "transcript", "plan", "steps", "sim_time_s", "wall_tim
 
 
 def humanoid(tmp_path, *args: str, timeout_s: float = 120.0) -> subprocess.CompletedProcess:
-    env = {**os.environ, "DATABASE_URL": f"sqlite:///{tmp_path / 'cli.db'}"}
+    env = {
+        **os.environ,
+        "DATABASE_URL": f"sqlite:///{tmp_path / 'cli.db'}",
+        "HUMANOID_AUDIO_DIR": str(tmp_path / "audio"),
+    }
     return subprocess.run([sys.executable, "-m", "app.cli", *args], capture_output=True, text=True, env=env,
                           timeout=timeout_s)  # fmt: skip
 
@@ -145,6 +150,10 @@ def test_transcribe_prints_text_and_confidence_and_run_takes_a_spoken_command(tm
     result = json.loads(run.stdout)
     assert result["success"] and result["transcript"] == "wait for three seconds"
     assert result["speech"]["file"] == str(wav) and result["steps"][0]["detail"] == "waited 3 s"
+    with sqlite3.connect(tmp_path / "cli.db") as db:  # kept with the run's session, with its recording
+        rows = db.execute("SELECT session_id, source, text, audio_path FROM transcripts").fetchall()
+    assert [(r[0], r[1], r[2]) for r in rows] == [(result["session_id"], "cli", "wait for three seconds")]
+    assert (tmp_path / "audio" / rows[0][3]).stat().st_size > 10_000
 
     missing = humanoid(tmp_path, "transcribe", str(tmp_path / "nope.wav"))
     assert missing.returncode == 2 and "no such audio file" in missing.stderr

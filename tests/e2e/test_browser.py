@@ -221,5 +221,11 @@ def test_a_command_spoken_into_the_microphone_is_heard_and_run(server, playwrigh
         if "press Send" in page.locator("#heard").inner_text():  # not sure enough to run unasked: confirm
             page.click("#send")
         expect(page.locator("#plan-steps li").first).to_contain_text("waited 3 s", timeout=30_000)
+        # what was said is kept with the session, and can be listened to again
+        session_id = httpx.get(f"{server.url}/api/health").json()["session_id"]
+        page.goto(f"{server.url}/sessions?id={session_id}")
+        heard = page.locator("#transcripts li").filter(has_text='"wait for three seconds"')
+        expect(heard).to_have_count(1, timeout=15_000)
+        expect(heard.locator("audio")).to_have_count(1)
     finally:
         browser.close()

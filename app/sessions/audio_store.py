@@ -1,0 +1,23 @@
+"""Recordings kept with their session: WAV files under the audio directory, one folder per session, referred to
+from the DB by a path relative to that directory (so the directory can move)."""
+
+from __future__ import annotations
+
+import uuid
+from pathlib import Path
+
+
+def save_recording(audio_dir: str | Path, session_id: int, wav: bytes) -> str:
+    """Write the WAV; returns its path relative to `audio_dir`."""
+    relative = Path(str(session_id)) / f"{uuid.uuid4().hex}.wav"
+    target = Path(audio_dir) / relative
+    target.parent.mkdir(parents=True, exist_ok=True)
+    target.write_bytes(wav)
+    return relative.as_posix()
+
+
+def recording_file(audio_dir: str | Path, relative: str) -> Path | None:
+    """The file a stored reference names, if it exists and lies inside the audio directory."""
+    root = Path(audio_dir).resolve()
+    path = (root / relative).resolve()
+    return path if path.is_relative_to(root) and path.is_file() else None
