@@ -919,13 +919,20 @@ class RobotWorker:
         queued = "awaits approval" if awaits else "queued"
         return CommandReply(True, f"plan {plan_id} {queued}{how}", command_id=command_id, plan=plan)
 
+    def _held_in(self, state: PlanState, missing: str) -> _Job | CommandReply:
+        """The held plan if it is in `state` and motion is allowed, else the refusal; under the lock."""
+        if refusal := self._refuse_if_unsafe() or self._refuse_if_teleop():
+            return refusal
+        job = self._held_job
+        if job is None or job.status.state != state:
+            return CommandReply(False, missing, Refusal.NOTHING_TO_DO)
+        return job
+
     def _approve_plan(self, command: ApprovePlan) -> CommandReply:
         with self._lock:
-            if refusal := self._refuse_if_unsafe() or self._refuse_if_teleop():
-                return refusal
-            job = self._held_job
-            if job is None or job.status.state != PlanState.AWAITING_APPROVAL:
-                return CommandReply(False, "no plan awaits approval", Refusal.NOTHING_TO_DO)
+            job = self._held_in(PlanState.AWAITING_APPROVAL, "no plan awaits approval")
+            if isinstance(job, CommandReply):
+                return job
             if command.plan_id is not None and command.plan_id != job.status.plan_id:
                 return CommandReply(False, f"plan {command.plan_id} no longer awaits approval (plan "
                                     f"{job.status.plan_id} does)", Refusal.INVALID, ("stale plan id",))  # fmt: skip
@@ -947,11 +954,9 @@ class RobotWorker:
 
     def _resume_plan(self) -> CommandReply:
         with self._lock:
-            if refusal := self._refuse_if_unsafe() or self._refuse_if_teleop():
-                return refusal
-            job = self._held_job
-            if job is None or job.status.state != PlanState.PAUSED:
-                return CommandReply(False, "no plan is paused", Refusal.NOTHING_TO_DO)
+            job = self._held_in(PlanState.PAUSED, "no plan is paused")
+            if isinstance(job, CommandReply):
+                return job
             start = next(s.index for s in job.status.steps if s.state == StepState.PAUSED)
             steps = tuple(replace(s, state=StepState.PENDING, detail="") if s.index == start else s
                           for s in job.status.steps)  # fmt: skip

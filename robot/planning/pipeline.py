@@ -73,23 +73,20 @@ class PlanningPipeline:
                 if self.fallback is None:
                     raise
                 notes.append(f"{self.backend}: {exc}")
-            else:
-                attempts = len(getattr(self.primary, "last_attempts", ())) or 1
+                plan = None
+            attempts = len(getattr(self.primary, "last_attempts", ())) or 1
+            if plan is not None:
                 if attempts > 1:
                     notes.append(f"{self.backend}: plan repaired after {attempts - 1} invalid answer(s)")
                 return PlanResult(plan, self.primary.name, self.backend, tuple(notes),
                                   time.perf_counter() - started, attempts)  # fmt: skip
-            attempts = len(getattr(self.primary, "last_attempts", ())) or 1
         if self.fallback is None:
             raise PlanningError("; ".join(notes))
         try:
             plan = self._checked(self.fallback, text, context)
         except PlanningError as exc:
-            if self.primary is self.fallback or not notes:
-                raise
             raise PlanningError("; ".join([*notes, f"{self.fallback.name} fallback: {exc}"])) from exc
-        if notes:
-            notes.append(f"planned by {self.fallback.name} instead")
+        notes.append(f"planned by {self.fallback.name} instead")
         return PlanResult(plan, self.fallback.name, self.backend, tuple(notes), time.perf_counter() - started,
                           attempts)  # fmt: skip
 

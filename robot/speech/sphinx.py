@@ -37,7 +37,6 @@ class PocketSphinxASR:
             import pocketsphinx
         except ImportError as exc:
             raise ASRError("pocketsphinx is not installed (pip install pocketsphinx)") from exc
-        self._ps = pocketsphinx
         model = Path(pocketsphinx.get_model_path()) / "en-us"
         vocabulary = {line.split(maxsplit=1)[0] for line in (model / "cmudict-en-us.dict").open() if line.strip()}
         self.grammar: Grammar = build_grammar(objects, places, vocabulary)
