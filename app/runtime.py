@@ -44,6 +44,7 @@ class Runtime:
                     planning=settings.planner_config(),
                     max_auto_replans=settings.max_auto_replans,
                     approve_plans=settings.approve_plans,
+                    voice=settings.voice_config(),
                 )
                 if settings.worker_process
                 else RobotWorker(
@@ -54,11 +55,12 @@ class Runtime:
                     planning=settings.planner_config(),
                     max_auto_replans=settings.max_auto_replans,
                     approve_plans=settings.approve_plans,
+                    voice=settings.voice_config(),
                 )
             )
         worker.start()
         recorder = SessionRecorder(db, worker, kind="serve", seed=settings.seed, backend=settings.backend,
-                                   sample_hz=settings.state_sample_hz)  # fmt: skip
+                                   sample_hz=settings.state_sample_hz, audio_dir=settings.audio_dir)  # fmt: skip
         mirrors = {}
         if settings.enable_mirror:
             for profile, viser_port in ((FULL, settings.viser_port), (LIGHT, settings.viser_light_port)):

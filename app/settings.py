@@ -11,6 +11,7 @@ from pydantic import AliasChoices, Field
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from robot.planning.pipeline import PlannerConfig
+from robot.speech.robot_voice import VoiceConfig
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 
@@ -65,6 +66,15 @@ class Settings(BaseSettings):
     asr_engine: Literal["pocketsphinx", "whisper"] = Field("pocketsphinx", description="speech recogniser")
     whisper_model_dir: str = Field("", description="a faster-whisper (CTranslate2) model directory")
     audio_dir: str = Field(str(REPO_ROOT / "data" / "audio"), description="where recordings are kept, by session")
+    microphone: str = Field("auto", description='the robot\'s microphone: "auto" (default input), "off", or a name')
+    speaker: str = Field("auto", description='the robot\'s speaker: "auto" (default output), "off", or a name')
+    voice_auto_run: bool = Field(True, description="run what the robot's microphone hears when the recogniser is sure")
+
+    def voice_config(self) -> VoiceConfig:
+        """The robot's microphone and speaker; its recordings wait under the audio directory for the session."""
+        return VoiceConfig(microphone=self.microphone, speaker=self.speaker, engine=self.asr_engine,
+                           whisper_model_dir=self.whisper_model_dir, auto_run=self.voice_auto_run,
+                           spool_dir=str(Path(self.audio_dir) / "incoming"))  # fmt: skip
 
     def planner_config(self) -> PlannerConfig:
         return PlannerConfig(

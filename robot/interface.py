@@ -460,6 +460,8 @@ class RobotDescription:
     control_hz: float
     physics_hz: float
     planner: str = "rules"  # which planner plans, and with which model: shown to the operator
+    microphone: str = ""  # the robot's microphone, or why it has none ("" when voice is not set up)
+    speaker: str = ""
 
 
 class EventSubscription(Protocol):

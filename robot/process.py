@@ -47,6 +47,7 @@ from robot.interface import (
     Teleop,
 )
 from robot.planning.pipeline import PlannerConfig
+from robot.speech.robot_voice import VoiceConfig
 from robot.state_board import StateBoard
 
 log = logging.getLogger(__name__)
@@ -72,8 +73,10 @@ class WorkerProcess:
         planning: PlannerConfig | None = None,
         max_auto_replans: int = 2,
         approve_plans: bool = False,
+        voice: VoiceConfig | None = None,
     ) -> None:
         self._seed = seed
+        self._voice = voice
         self._approve_plans = approve_plans
         self._planning = planning or PlannerConfig()
         self._max_auto_replans = max_auto_replans
@@ -109,6 +112,7 @@ class WorkerProcess:
                 self._planning,
                 self._max_auto_replans,
                 self._approve_plans,
+                self._voice,
             ),
             name="robot-worker",
             daemon=True,
@@ -237,6 +241,7 @@ def child_main(
     planning: PlannerConfig | None = None,
     max_auto_replans: int = 2,
     approve_plans: bool = False,
+    voice: VoiceConfig | None = None,
 ) -> None:
     """Entry point of the worker process: build the robot, then serve commands until told to stop."""
     try:
@@ -245,12 +250,12 @@ def child_main(
 
         worker = RobotWorker(generate_world(seed), realtime=realtime, control_hz=control_hz, perception=perception,
                              planning=planning, max_auto_replans=max_auto_replans,
-                             approve_plans=approve_plans)  # fmt: skip
+                             approve_plans=approve_plans, voice=voice)  # fmt: skip
         subscription = worker.subscribe()
-        description = worker.describe()
         if realtime:  # every thread started from here on inherits it; the control loop goes higher still
             raise_thread_priority(WORKER_FIFO_PRIORITY)
         worker.start()
+        description = worker.describe()  # after starting: it says which microphone and speaker were found
     except Exception:
         conn.send(("fatal", traceback.format_exc()))
         return

@@ -112,6 +112,7 @@ from robot.planning.validator import validate_plan_json
 from robot.planning.world_context import WorldContext
 from robot.sim.backend import Measurements, MujocoSimBackend
 from robot.simple_actions import SimpleActions
+from robot.speech.robot_voice import RobotVoice, VoiceConfig
 from robot.state_board import StateBoard
 from robot.task_bodies import ArmBody, NavBodyOfWorker, TaskBody, carry_back_away_m
 
@@ -166,6 +167,7 @@ class RobotWorker:
         control_hz: float = 100.0,
         locomotion: LocomotionController | None = None,
         perception: bool = True,
+        voice: VoiceConfig | None = None,
     ) -> None:
         self.layout = layout
         self.backend = backend or MujocoSimBackend(layout)
@@ -237,6 +239,8 @@ class RobotWorker:
         self._board = StateBoard()
         self._threads: list[threading.Thread] = []
         self._description: RobotDescription | None = None
+        self._voice_config = voice
+        self._voice: RobotVoice | None = None  # the robot's microphone and speaker, opened on start
         self._publish_state(self.backend.read())
 
     # ----------------------------------------------------------------------------------------------------------
@@ -258,6 +262,11 @@ class RobotWorker:
             thread.start()
         if self._perception is not None:
             self._perception.start()
+        if self._voice_config is not None:
+            world = self._world_context()
+            self._voice = RobotVoice(self._voice_config, world.objects, world.places, self._bus.publish,
+                                     lambda text: self.submit(RunCommand(text)), self._bus.subscribe)  # fmt: skip
+            self._voice.start()
         self._bus.publish("worker/started", f"robot worker started ({'real time' if self.realtime else 'headless'})")
 
     def is_alive(self) -> bool:
@@ -273,6 +282,9 @@ class RobotWorker:
         for thread in self._threads:
             thread.join(timeout=5.0)
         self._threads = []
+        if self._voice is not None:
+            self._voice.stop()
+            self._voice = None
         if self._perception is not None:
             self._perception.stop()
         self._loco.walking.planner.close()
@@ -340,7 +352,9 @@ class RobotWorker:
                 physics_hz=1.0 / self.backend.physics_dt,
                 planner=self.planning.describe(),
             )
-        return self._description
+        if self._voice is None:
+            return self._description
+        return replace(self._description, microphone=self._voice.microphone_status, speaker=self._voice.speaker_status)
 
     # ----------------------------------------------------------------------------------------------------------
     # what plan steps can do

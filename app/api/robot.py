@@ -122,6 +122,8 @@ def config(rt: RuntimeDep) -> dict[str, Any]:
         "physics_hz": description.physics_hz,
         "planner": description.planner,
         "planner_backend": rt.settings.planner_backend,
+        "microphone": description.microphone,
+        "speaker": description.speaker,
         "approval_required": rt.worker.state().approval_required,
         "session_id": rt.recorder.session_id,
     }

@@ -3,6 +3,7 @@ from the DB by a path relative to that directory (so the directory can move)."""
 
 from __future__ import annotations
 
+import shutil
 import uuid
 from pathlib import Path
 
@@ -21,3 +22,16 @@ def recording_file(audio_dir: str | Path, relative: str) -> Path | None:
     root = Path(audio_dir).resolve()
     path = (root / relative).resolve()
     return path if path.is_relative_to(root) and path.is_file() else None
+
+
+def keep_recording(audio_dir: str | Path, session_id: int, source: str | Path) -> str | None:
+    """Move a recording made elsewhere (the robot's microphone spools each utterance) into the session's folder;
+    its relative path, or None when the file is gone."""
+    source = Path(source)
+    if not source.is_file():
+        return None
+    relative = Path(str(session_id)) / f"{uuid.uuid4().hex}.wav"
+    target = Path(audio_dir) / relative
+    target.parent.mkdir(parents=True, exist_ok=True)
+    shutil.move(str(source), target)
+    return relative.as_posix()

@@ -14,6 +14,7 @@ from typing import Any
 from sqlalchemy import update
 from sqlalchemy.orm import sessionmaker
 
+from app.sessions.audio_store import keep_recording
 from app.sessions.models import (
     CommandRow,
     EventRow,
@@ -53,8 +54,10 @@ class SessionRecorder:
         seed: int,
         backend: str = "sim",
         sample_hz: float = 10.0,
+        audio_dir: str | None = None,
     ) -> None:
         self._factory = session_factory
+        self._audio_dir = audio_dir  # where the robot microphone's recordings are moved to, by session
         self._port = port
         self._sample_period = 1.0 / sample_hz
         self._pending: queue.Queue[Any] = queue.Queue()
@@ -140,6 +143,15 @@ class SessionRecorder:
             return
         sid = self.session_id
         data = dict(event.data)
+        if event.kind == "speech/heard":  # the robot's microphone: the transcript and its recording
+            data["audio_path"] = self._keep(data.get("audio_path"))
+            self.record_transcript(data, data.get("source", "robot-mic"), data["audio_path"])
+        elif event.kind == "speech/command":  # ... and the command it ran on hearing it
+            self._pending.put(
+                CommandRow(session_id=sid, robot_command_id=data.get("command_id"), received_at=_utc(event.wall_time_s),
+                           source=data.get("source", "robot-mic"), text=data["text"], accepted=data["accepted"],
+                           refusal=data.get("refusal"), errors=data.get("errors") or None)
+            )  # fmt: skip
         self._pending.put(
             EventRow(session_id=sid, seq=event.seq, kind=event.kind, level=int(event.level), message=event.message,
                      data=data or None, wall_time=_utc(event.wall_time_s), sim_time_s=event.sim_time_s)
@@ -159,6 +171,15 @@ class SessionRecorder:
             )  # fmt: skip
         elif event.kind == "plan/finished":
             self._pending.put(_PlanFinished(data["plan_id"], data["state"], _utc(event.wall_time_s)))
+
+    def _keep(self, spooled: str | None) -> str | None:
+        if not spooled or self._audio_dir is None:
+            return None
+        try:
+            return keep_recording(self._audio_dir, self.session_id, spooled)
+        except OSError as exc:  # a full disk loses this recording, not the transcript
+            log.warning("cannot keep the recording %s: %s", spooled, exc)
+            return None
 
     def _sample(self) -> None:
         s = self._port.state()

@@ -103,6 +103,14 @@ def _read_with_pyav(path: Path) -> Audio:
     return Audio(np.concatenate(chunks).astype(np.int16) if chunks else np.zeros(0, np.int16))
 
 
+def at_rate(audio: Audio, rate: int) -> np.ndarray:
+    """The samples as int16 at another rate (for a speaker that does not take 16 kHz)."""
+    if rate == RATE or not len(audio.samples):
+        return audio.samples
+    floats = _resample(audio.samples.astype(np.float64), RATE, rate)
+    return np.clip(np.round(floats), -32768, 32767).astype(np.int16)
+
+
 def _resample(samples: np.ndarray, rate: int, target: int) -> np.ndarray:
     """Band-limited resampling: a windowed-sinc low-pass below the lower Nyquist frequency, then interpolation."""
     if target < rate:

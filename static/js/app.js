@@ -37,6 +37,8 @@ async function loadConfig() {
   const response = await fetch("/api/config");
   humanoid.config = await response.json();
   $("planner").textContent = "planner: " + humanoid.config.planner;
+  const robotAudio = [humanoid.config.microphone, humanoid.config.speaker].filter(Boolean);
+  $("robot-audio").textContent = robotAudio.join(" · ");
   $("approve-toggle").checked = humanoid.config.approval_required;
   const software = softwareWebGL();
   // Browsers without a GPU get the light view: the full one keeps a CPU renderer busy ~200 ms a frame.
@@ -250,6 +252,9 @@ function addEvent(e) {
   humanoid.events.push(e);
   if (e.kind === "speech/say" && humanoid.onSay && humanoid.connectedAt && e.wall_time_s > humanoid.connectedAt) {
     humanoid.onSay(e.data.text || e.message);  // new ones only: not the history sent on connecting
+  }
+  if (e.kind === "speech/heard" && humanoid.onRobotHeard && humanoid.connectedAt && e.wall_time_s > humanoid.connectedAt) {
+    humanoid.onRobotHeard(e.data);  // the robot's own microphone heard a command
   }
   if (e.kind === "plan/created") {
     // who planned it, how long it took, and why the configured planner's plan was not used as it came

@@ -23,6 +23,14 @@
     el.className = "result " + (isError ? "error" : "ok");
   }
 
+  // The robot's own microphone: what it heard, run already when it was sure, else offered for confirmation.
+  window.humanoid.onRobotHeard = (data) => {
+    const sure = `confidence ${data.confidence.toFixed(2)}${data.in_grammar ? "" : ", not a known command form"}`;
+    if (data.will_run) return heard(`the robot heard "${data.text}" (${sure}): running`, false);
+    $("command-text").value = data.text;
+    heard(`the robot heard "${data.text}" (${sure}): press Send to run it, or edit it first`, false);
+  };
+
   if (!window.isSecureContext || !navigator.mediaDevices || !window.AudioWorkletNode) {
     $("ptt").disabled = true;
     heard(`The microphone needs a secure context: open this page as http://localhost:${location.port} or ` +

@@ -13,6 +13,7 @@ import pytest
 from app.bench.voice import run_trials, spoken_cases, summarise, word_errors
 from robot.planning.world_context import WorldContext
 from robot.speech.audio import RATE, Audio, AudioError, add_noise, from_samples, read_wav_bytes
+from robot.speech.denoise import denoise
 from robot.speech.grammar import build_grammar
 from robot.speech.sphinx import AUTO_RUN_CONFIDENCE, PocketSphinxASR
 from robot.speech.tts import TTSError, synthesize, synthesize_audio
@@ -61,6 +62,18 @@ def test_noise_is_added_at_the_asked_signal_to_noise_ratio() -> None:
     noise = noisy.samples.astype(float) - clean.samples
     snr = 10 * np.log10(np.mean(clean.samples.astype(float) ** 2) / np.mean(noise**2))
     assert 9.5 < snr < 10.5
+
+
+def test_steady_noise_is_taken_out_and_clean_speech_left_alone() -> None:
+    clean = synthesize_audio("pick up the red mug from the kitchen counter", "en-us", 160)
+    noisy = add_noise(clean, 10.0, seed=2)
+
+    def snr_db(samples: np.ndarray) -> float:
+        residue = samples.astype(float) - clean.samples
+        return 10 * np.log10(np.mean(clean.samples.astype(float) ** 2) / np.mean(residue**2))
+
+    assert snr_db(denoise(noisy.samples)) > snr_db(noisy.samples) + 3.0
+    assert np.array_equal(denoise(clean.samples), clean.samples)  # espeak's digital silence: no noise to remove
 
 
 def test_the_grammar_names_the_worlds_things_and_accepts_only_whole_commands(world) -> None:

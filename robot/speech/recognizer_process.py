@@ -1,0 +1,121 @@
+"""A recogniser in its own process, behind the same `transcribe` interface.
+
+Why: pocketsphinx holds the interpreter lock while it decodes, up to 85 ms for one command (measured with a 1 ms
+ticker thread beside it). In the robot worker's process that would stall the control loop for eight ticks. The
+worker is itself a daemon process, which multiprocessing forbids to have children, so this is a plain
+subprocess (`python -m robot.speech.recognizer_process`) speaking pickles over its stdin and stdout.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import pickle
+import struct
+import subprocess
+import sys
+import threading
+from pathlib import Path
+from typing import IO, Any
+
+from robot.speech.asr import ASRError, Transcript
+from robot.speech.audio import Audio
+
+STARTUP_TIMEOUT_S = 60.0
+_HEADER = struct.Struct("<I")
+
+
+def _send(stream: IO[bytes], message: Any) -> None:
+    data = pickle.dumps(message, protocol=pickle.HIGHEST_PROTOCOL)
+    stream.write(_HEADER.pack(len(data)) + data)
+    stream.flush()
+
+
+def _receive(stream: IO[bytes]) -> Any:
+    header = stream.read(_HEADER.size)
+    if len(header) < _HEADER.size:
+        raise EOFError("the recogniser process has gone")
+    (length,) = _HEADER.unpack(header)
+    return pickle.loads(stream.read(length))
+
+
+def _ordinary_priority() -> None:
+    """Decoding is no real-time work: the child does not inherit the worker's real-time scheduling."""
+    with contextlib.suppress(AttributeError, OSError):
+        os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
+
+
+class RecognizerProcess:
+    """`transcribe` as in-process engines, decoded in a child process (started here; `close()` ends it)."""
+
+    def __init__(self, engine: str, objects: dict[str, tuple[str, ...]], places: dict[str, tuple[str, ...]],
+                 whisper_model_dir: str = "") -> None:  # fmt: skip
+        self.name = engine
+        root = str(Path(__file__).resolve().parents[2])  # this source tree, whether installed or not
+        self._process = subprocess.Popen(
+            [sys.executable, "-m", "robot.speech.recognizer_process"],
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, cwd=root, preexec_fn=_ordinary_priority,
+        )  # fmt: skip
+        self._lock = threading.Lock()
+        assert self._process.stdin is not None and self._process.stdout is not None
+        self._in, self._out = self._process.stdin, self._process.stdout
+        _send(self._in, (engine, objects, places, whisper_model_dir))
+        reply = self._reply()
+        if reply[0] != "ready":
+            self.close()
+            raise ASRError(reply[1])
+
+    def transcribe(self, audio: Audio) -> Transcript:
+        with self._lock:
+            try:
+                _send(self._in, audio.samples)
+                reply = self._reply()
+            except (OSError, ValueError) as exc:
+                raise ASRError(f"the recogniser process has gone: {exc}") from exc
+        if reply[0] != "transcript":
+            raise ASRError(reply[1])
+        return reply[1]
+
+    def close(self) -> None:
+        if self._process.poll() is None:
+            self._in.close()
+            try:
+                self._process.wait(timeout=5.0)
+            except subprocess.TimeoutExpired:
+                self._process.kill()
+                self._process.wait()
+        self._out.close()
+
+    def _reply(self) -> tuple[str, Any]:
+        try:
+            return _receive(self._out)
+        except EOFError as exc:
+            raise ASRError(f"the recogniser process exited with code {self._process.wait()}") from exc
+
+
+def _serve(stdin: IO[bytes], stdout: IO[bytes]) -> None:
+    from robot.speech.engines import build_recognizer
+
+    engine, objects, places, whisper_model_dir = _receive(stdin)
+    try:
+        recognizer = build_recognizer(engine, objects, places, whisper_model_dir)
+    except ASRError as exc:
+        _send(stdout, ("error", str(exc)))
+        return
+    _send(stdout, ("ready", None))
+    while True:
+        try:
+            samples = _receive(stdin)
+        except EOFError:
+            return
+        try:
+            _send(stdout, ("transcript", recognizer.transcribe(Audio(samples))))
+        except Exception as exc:  # a decoder error answers; it does not kill the process
+            _send(stdout, ("error", f"{type(exc).__name__}: {exc}"))
+
+
+if __name__ == "__main__":
+    # the protocol owns stdout: anything a library prints goes to stderr instead
+    protocol_out = os.fdopen(os.dup(1), "wb")
+    os.dup2(2, 1)
+    _serve(sys.stdin.buffer, protocol_out)
