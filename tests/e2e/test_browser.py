@@ -38,6 +38,12 @@ def test_chromium_is_installed() -> None:
     assert chromium_path()
 
 
+def test_the_voice_panel_says_the_robot_has_no_microphone_or_speaker_here(page) -> None:
+    # test machines have no sound card: the page says so, and push-to-talk in the page still works (below)
+    playwright_api.expect(page.locator("#robot-audio")).to_contain_text("no robot microphone: ", timeout=20_000)
+    playwright_api.expect(page.locator("#robot-audio")).to_contain_text("no robot speaker: ")
+
+
 def test_the_3d_mirror_renders_in_a_cross_site_frame(page, server) -> None:
     # Page on 127.0.0.1, scene on localhost: another site. Headless Chromium renders WebGL in software, so the
     # page picks the light view at half resolution (its script sets the frame's source after probing WebGL: wait).

@@ -20,6 +20,7 @@ import httpx
 import numpy as np
 import pytest
 
+from app.bench.browser import launch_chromium
 from app.bench.server import ServerProcess
 from robot.speech.tts import synthesize_audio
 
@@ -107,12 +108,29 @@ def test_the_robot_hears_a_command_with_its_microphone_and_answers_aloud(tmp_pat
     os.mkfifo(pipe)
     (home / ".asoundrc").write_text(ASOUNDRC.format(microphone=pipe, speaker=spoken))
     env = {"HOME": str(home), "HUMANOID_MICROPHONE": "robotmic", "HUMANOID_SPEAKER": "robotspeaker"}
-    with RoomMicrophone(pipe) as room, ServerProcess(tmp_path / "server", extra_env=env) as server:
+    sync_api = pytest.importorskip("playwright.sync_api")
+    with (
+        RoomMicrophone(pipe) as room,
+        ServerProcess(tmp_path / "server", extra_env=env) as server,
+        sync_api.sync_playwright() as playwright,
+    ):
         config = server.get("/api/config")
         assert config["microphone"] == "robot microphone: robotmic (16000 Hz)"
         assert config["speaker"] == "robot speaker: robotspeaker (16000 Hz)"
-        time.sleep(1.0)
+        browser = launch_chromium(playwright)
+        page = browser.new_page()
+        page.goto(server.url)
+        sync_api.expect(page.locator("#robot-audio")).to_have_text(
+            "robot microphone: robotmic (16000 Hz) · robot speaker: robotspeaker (16000 Hz)"
+        )
+        sync_api.expect(page.locator("#conn")).to_have_text("connected", timeout=20_000)
         room.say(synthesize_audio("go back to where you started", "en-us", 150).samples)
+        # the operator sees what the robot heard, and that it is running it
+        sync_api.expect(page.locator("#heard")).to_contain_text(
+            'the robot heard "go back to where you started"', timeout=30_000
+        )
+        assert "running" in page.locator("#heard").inner_text()
+        browser.close()
         deadline, events = time.monotonic() + 60, []
         while time.monotonic() < deadline:
             events = server.get("/api/events")
