@@ -149,3 +149,15 @@ def test_synthesis_makes_a_wav_and_refuses_what_it_cannot_say() -> None:
         synthesize("   ")
     with pytest.raises(TTSError, match="at most 500 characters"):
         synthesize("word " * 200)
+
+
+def test_whisper_without_a_model_directory_says_what_to_set(tmp_path, world) -> None:
+    from robot.speech.asr import ASRError
+    from robot.speech.engines import build_recognizer
+
+    with pytest.raises(ASRError, match="HUMANOID_WHISPER_MODEL_DIR"):
+        build_recognizer("whisper", world.objects, world.places, "")
+    with pytest.raises(ASRError, match=r"model\.bin"):
+        build_recognizer("whisper", world.objects, world.places, str(tmp_path))  # a directory without a model
+    with pytest.raises(ASRError, match="unknown speech engine 'vosk'"):
+        build_recognizer("vosk", world.objects, world.places)
