@@ -31,3 +31,14 @@ def raise_thread_priority(fifo_priority: int = CONTROL_FIFO_PRIORITY) -> str:
         return "raised priority (nice -10); no real-time scheduling"
     except (PermissionError, OSError, AttributeError):
         return "normal priority (no permission for real-time scheduling: run as root or grant CAP_SYS_NICE)"
+
+
+def ordinary_priority() -> None:
+    """For a child process (`subprocess`'s `preexec_fn`): drop the real-time scheduling a worker thread would pass
+    on. A recogniser or a speech synthesiser is no real-time work, and on two cores a real-time one would shut the
+    web server out while it runs."""
+    try:
+        os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
+        os.setpriority(os.PRIO_PROCESS, 0, 0)
+    except (PermissionError, OSError, AttributeError):
+        pass

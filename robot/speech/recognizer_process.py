@@ -8,7 +8,6 @@ subprocess (`python -m robot.speech.recognizer_process`) speaking pickles over i
 
 from __future__ import annotations
 
-import contextlib
 import os
 import pickle
 import struct
@@ -18,6 +17,7 @@ import threading
 from pathlib import Path
 from typing import IO, Any
 
+from robot.control.priority import ordinary_priority
 from robot.speech.asr import ASRError, Transcript
 from robot.speech.audio import Audio
 
@@ -39,12 +39,6 @@ def _receive(stream: IO[bytes]) -> Any:
     return pickle.loads(stream.read(length))
 
 
-def _ordinary_priority() -> None:
-    """Decoding is no real-time work: the child does not inherit the worker's real-time scheduling."""
-    with contextlib.suppress(AttributeError, OSError):
-        os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
-
-
 class RecognizerProcess:
     """`transcribe` as in-process engines, decoded in a child process (started here; `close()` ends it)."""
 
@@ -54,7 +48,7 @@ class RecognizerProcess:
         root = str(Path(__file__).resolve().parents[2])  # this source tree, whether installed or not
         self._process = subprocess.Popen(
             [sys.executable, "-m", "robot.speech.recognizer_process"],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, cwd=root, preexec_fn=_ordinary_priority,
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, cwd=root, preexec_fn=ordinary_priority,
         )  # fmt: skip
         self._lock = threading.Lock()
         assert self._process.stdin is not None and self._process.stdout is not None

@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from robot.interface import CommandReply, Event, EventSubscription, Level
-from robot.speech.asr import SpeechRecognizer
+from robot.speech.asr import ASRError, SpeechRecognizer
 from robot.speech.audio import Audio
 from robot.speech.devices import AudioDevice, find_device
 from robot.speech.microphone import Microphone
@@ -139,8 +139,13 @@ class RobotVoice:
     # hearing
 
     def _on_utterance(self, audio: Audio) -> None:
-        assert self._recognizer is not None
-        transcript = self._recognizer.transcribe(audio)
+        if self._recognizer is None:
+            return
+        try:
+            transcript = self._recognizer.transcribe(audio)
+        except ASRError as exc:  # the recogniser's process died: say so, start another, and listen on
+            self._restart_recognizer(str(exc))
+            return
         if not transcript.text:
             return  # a noise, a cough: nothing to show or keep
         sure = transcript.in_grammar and transcript.confidence >= AUTO_RUN_CONFIDENCE
@@ -166,6 +171,19 @@ class RobotVoice:
                           text=transcript.text, source=SOURCE, accepted=reply.accepted, command_id=reply.command_id,
                           refusal=reply.refusal.value if reply.refusal else None, reply=reply.message,
                           errors=list(reply.errors))  # fmt: skip
+
+    def _restart_recognizer(self, problem: str) -> None:
+        self._publish("speech/microphone", f"the recogniser failed ({problem}): an utterance was lost; restarting it",
+                      Level.WARN, available=True, problem=problem)  # fmt: skip
+        if hasattr(self._recognizer, "close"):
+            self._recognizer.close()
+        try:
+            self._recognizer = self._recognizer_factory(self.config.engine, self._objects, self._places,
+                                                        self.config.whisper_model_dir)  # fmt: skip
+        except Exception as exc:
+            self.microphone_status = f"no robot microphone: the recogniser cannot restart ({exc})"
+            self._publish("speech/microphone", self.microphone_status, Level.ERROR, available=False, reason=str(exc))
+            self._recognizer = None  # the microphone stays open, unheard
 
     def _spool_utterance(self, audio: Audio) -> str | None:
         try:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import shutil
 import subprocess
 
+from robot.control.priority import ordinary_priority
 from robot.speech.audio import Audio, read_wav_bytes
 
 DEFAULT_VOICE = "en-us"
@@ -32,7 +33,7 @@ def synthesize(text: str, voice: str = DEFAULT_VOICE, words_per_minute: int = DE
         raise TTSError("espeak-ng is not installed (apt-get install espeak-ng)")
     done = subprocess.run(
         ["espeak-ng", "-v", voice, "-s", str(int(words_per_minute)), "-p", str(int(pitch)), "--stdout", text],
-        capture_output=True, timeout=30, check=False,
+        capture_output=True, timeout=30, check=False, preexec_fn=ordinary_priority,
     )  # fmt: skip
     if done.returncode != 0 or not done.stdout.startswith(b"RIFF"):
         raise TTSError(f"espeak-ng failed: {done.stderr.decode(errors='replace').strip() or done.returncode}")

@@ -255,3 +255,13 @@ def test_the_voice_bench_times_the_robot_microphone_from_the_end_of_speech() -> 
     latency = result["end_of_speech_to_plan_ms"]
     # the voice-activity window (0.2 s) is part of it: never faster than that, and well under two seconds
     assert 150 < latency["p50"] <= latency["max"] < 2000, result
+
+
+def test_a_recogniser_that_dies_is_restarted_and_the_robot_listens_on(voice_rig) -> None:
+    bus, commands, make = voice_rig
+    voice = make(_stream(1.0, _speech("hello there"), 1.5, _speech("go to the charging dock"), 1.0))
+    voice._recognizer._process.kill()  # as if the decoder crashed: the first utterance is lost with it
+    failed = _events(bus, "speech/microphone", 2)[1]
+    assert failed.level == Level.WARN and "restarting it" in failed.message
+    assert _events(bus, "speech/heard", 1)[0].data["text"] == "go to the charging dock"
+    assert commands == ["go to the charging dock"]
