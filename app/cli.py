@@ -1,4 +1,4 @@
-"""The `humanoid` command: serve, run, transcribe, plan, estop, db upgrade, bench."""
+"""The `humanoid` command: serve, run, transcribe, plan, estop, sessions, db upgrade, bench."""
 
 from __future__ import annotations
 
@@ -6,6 +6,7 @@ import argparse
 import json
 import sys
 
+from app.sessions.cli import add_sessions_parser
 from app.settings import Settings, get_settings
 
 
@@ -24,7 +25,10 @@ def _serve(args: argparse.Namespace, settings: Settings) -> int:
     # interval bounds how long the e-stop relay can wait for it behind a busy thread.
     sys.setswitchinterval(0.0005)
     print(f"Humanoid mission control: http://{settings.host}:{settings.port}")
-    print(f"  3D views on ports {settings.viser_port} (full) and {settings.viser_light_port} (light)")
+    print(
+        f"  3D views on ports {settings.viser_port} (full) and {settings.viser_light_port} (light); "
+        f"session replay on {settings.replay_port}"
+    )
     uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_level="warning", ws_max_size=65536)
     return 0
 
@@ -221,19 +225,25 @@ def build_parser() -> argparse.ArgumentParser:
     estop.add_argument("--url", default=None, help="server URL (default http://HOST:PORT)")
     estop.set_defaults(func=_estop)
 
+    add_sessions_parser(sub)
+
     db = sub.add_parser("db", help="database maintenance")
     db_sub = db.add_subparsers(dest="db_command", required=True)
     db_sub.add_parser("upgrade", help="apply pending migrations").set_defaults(func=_db)
 
     bench = sub.add_parser("bench", help="benchmarks, written as JSON")
-    bench.add_argument("suite", choices=["core", "walk", "perception", "capstone", "planner", "voice"])
+    bench.add_argument("suite", choices=["core", "walk", "perception", "capstone", "planner", "voice", "sessions"])
     bench.add_argument("--json", action="store_true", help="print the JSON result")
     bench.add_argument("--output", default=None, help="also write the JSON result to this file")
     bench.add_argument("--presses", type=int, default=100, help="e-stop presses to time")
     bench.add_argument("--viewers", type=int, default=2, help="browser pages with the 3D view open")
     bench.add_argument(
-        "--duration", type=float, default=30.0, help="seconds of control-loop timing (>= 30 s: the tick window)"
+        "--duration",
+        type=float,
+        default=30.0,
+        help="core: seconds of control-loop timing (>= 30 s: the tick window); sessions: seconds per phase",
     )
+    bench.add_argument("--session-minutes", type=float, default=10.0, help="sessions: length of the long session")
     bench.add_argument("--scripts", type=int, default=20, help="walk: random velocity scripts to run")
     bench.add_argument("--script-duration", type=float, default=60.0, help="walk: seconds per script")
     bench.add_argument("--seed", type=int, default=0, help="walk, perception: first seed")

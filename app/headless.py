@@ -7,6 +7,7 @@ from typing import Any
 
 from app.sessions.audio_store import save_recording
 from app.sessions.db import make_engine, make_session_factory, upgrade_to_head
+from app.sessions.maintenance import close_interrupted_sessions
 from app.sessions.recorder import SessionRecorder
 from app.settings import Settings
 from robot.interface import PlanState, RunCommand
@@ -29,8 +30,11 @@ def run_command(
     engine = make_engine(settings.database_url)
     worker = RobotWorker(generate_world(seed), realtime=False, control_hz=settings.control_hz,
                          planning=settings.planner_config(), max_auto_replans=settings.max_auto_replans)  # fmt: skip
-    recorder = SessionRecorder(make_session_factory(engine), worker, kind="run", seed=seed,
-                               sample_hz=settings.state_sample_hz)  # fmt: skip
+    factory = make_session_factory(engine)
+    close_interrupted_sessions(factory)
+    recorder = SessionRecorder(factory, worker, kind="run", seed=seed, audio_dir=settings.audio_dir,
+                               camera_hz=settings.record_camera_hz,
+                               camera_width=settings.record_camera_width)  # fmt: skip
     started = time.perf_counter()
     worker.start()
     try:

@@ -89,7 +89,8 @@ def create_app(settings: Settings | None = None, runtime: Runtime | None = None)
         lifespan=lifespan,
     )
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes,
-                       larger={"/api/speech/transcribe": speech.MAX_AUDIO_BYTES})  # fmt: skip
+                       larger={"/api/speech/transcribe": speech.MAX_AUDIO_BYTES,
+                               sessions.IMPORT_PATH: settings.max_import_bytes})  # fmt: skip
     app.add_exception_handler(RequestValidationError, _validation_error)
     app.include_router(robot.router)
     app.include_router(perception.router)

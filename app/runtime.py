@@ -9,7 +9,9 @@ from sqlalchemy import Engine
 from sqlalchemy.orm import sessionmaker
 
 from app.mirror import FULL, LIGHT, SceneMirror
+from app.replay import SessionReplay
 from app.sessions.db import make_engine, make_session_factory, upgrade_to_head
+from app.sessions.maintenance import apply_retention, close_interrupted_sessions
 from app.sessions.recorder import SessionRecorder
 from app.settings import Settings
 from robot.interface import RobotPort
@@ -20,6 +22,13 @@ from robot.worker import RobotWorker
 log = logging.getLogger(__name__)
 
 
+def _maintain(db: sessionmaker, settings: Settings, live_session_id: int) -> None:
+    """Every few minutes while serving: close sessions other servers left open, apply the retention settings."""
+    close_interrupted_sessions(db)
+    apply_retention(db, settings.audio_dir, settings.session_retention_days, settings.session_retention_count,
+                    keep={live_session_id})  # fmt: skip
+
+
 @dataclass
 class Runtime:
     settings: Settings
@@ -28,6 +37,7 @@ class Runtime:
     db: sessionmaker
     recorder: SessionRecorder
     mirrors: dict[str, SceneMirror]  # by profile name: "full" and "light"
+    replay: SessionReplay | None = None  # the stored sessions' 3D replay (with the mirrors)
 
     @staticmethod
     def start(settings: Settings, worker: RobotPort | None = None) -> Runtime:
@@ -35,6 +45,7 @@ class Runtime:
         upgrade_to_head(settings.database_url)
         engine = make_engine(settings.database_url)
         db = make_session_factory(engine)
+        close_interrupted_sessions(db)
         if worker is None:
             worker = (
                 WorkerProcess(
@@ -60,18 +71,23 @@ class Runtime:
             )
         worker.start()
         recorder = SessionRecorder(db, worker, kind="serve", seed=settings.seed, backend=settings.backend,
-                                   sample_hz=settings.state_sample_hz, audio_dir=settings.audio_dir)  # fmt: skip
+                                   audio_dir=settings.audio_dir, camera_hz=settings.record_camera_hz,
+                                   camera_width=settings.record_camera_width,
+                                   maintenance=lambda: _maintain(db, settings, recorder.session_id))  # fmt: skip
         mirrors = {}
         if settings.enable_mirror:
             for profile, viser_port in ((FULL, settings.viser_port), (LIGHT, settings.viser_light_port)):
                 mirrors[profile.name] = SceneMirror(worker, settings.viser_host, viser_port, settings.mirror_hz,
                                                     profile=profile, shadows=settings.mirror_shadows)  # fmt: skip
                 mirrors[profile.name].start()
-        return Runtime(settings, worker, engine, db, recorder, mirrors)
+        replay = SessionReplay(db, settings.viser_host, settings.replay_port) if settings.enable_mirror else None
+        return Runtime(settings, worker, engine, db, recorder, mirrors, replay)
 
     def stop(self) -> None:
         for mirror in self.mirrors.values():
             mirror.stop()
+        if self.replay is not None:
+            self.replay.stop()
         self.worker.stop()
-        self.recorder.close(outcome=None)
+        self.recorder.close()
         self.engine.dispose()

@@ -32,7 +32,6 @@ class Settings(BaseSettings):
     seed: int = Field(0, ge=0)
     control_hz: float = Field(100.0, gt=0, le=1000)
     mirror_hz: float = Field(30.0, gt=0, le=120)
-    state_sample_hz: float = Field(10.0, gt=0, le=100, description="robot state samples stored per second")
     ws_state_hz: float = Field(20.0, gt=0, le=100, description="state pushes per second to each browser")
     max_body_bytes: int = Field(64 * 1024, gt=0, description="largest accepted HTTP request body")
     enable_mirror: bool = True
@@ -69,6 +68,14 @@ class Settings(BaseSettings):
     microphone: str = Field("auto", description='the robot\'s microphone: "auto" (default input), "off", or a name')
     speaker: str = Field("auto", description='the robot\'s speaker: "auto" (default output), "off", or a name')
     voice_auto_run: bool = Field(True, description="run what the robot's microphone hears when the recogniser is sure")
+
+    # sessions: what is recorded, how long it is kept, the replay's 3D view
+    record_camera_hz: float = Field(1.0, ge=0, le=30, description="head camera frames stored per second (0: none)")
+    record_camera_width: int = Field(320, ge=32, le=1920, description="stored camera frames are scaled to this width")
+    session_retention_days: float = Field(0.0, ge=0, description="delete sessions older than this (0: keep all)")
+    session_retention_count: int = Field(0, ge=0, description="keep at most this many sessions (0: no limit)")
+    replay_port: int = Field(8083, ge=1, le=65535, description="port of the session replay's 3D view")
+    max_import_bytes: int = Field(512 * 1024 * 1024, gt=0, description="largest session JSON accepted for import")
 
     def voice_config(self) -> VoiceConfig:
         """The robot's microphone and speaker; its recordings wait under the audio directory for the session."""

@@ -8,7 +8,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import IntEnum, StrEnum
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
+
+if TYPE_CHECKING:
+    from robot.telemetry import TelemetryBatch
 
 # ---------------------------------------------------------------------------------------------------------------
 # Plans
@@ -410,6 +413,16 @@ class NavigationState:
 
 
 @dataclass(frozen=True)
+class PowerState:
+    """The battery pack as the robot measures it (simulated: drained by what the servos do)."""
+
+    voltage_v: float
+    current_a: float
+    soc: float  # state of charge, 0..1
+    power_w: float
+
+
+@dataclass(frozen=True)
 class RobotState:
     """An immutable snapshot published by the control loop."""
 
@@ -432,6 +445,7 @@ class RobotState:
     mocap_positions: tuple[float, ...] = ()  # kinematic bodies of the scene (x, y, z each), beside qpos
     navigation: NavigationState | None = None
     approval_required: bool = False  # plans wait for the operator's approval before they run
+    power: PowerState | None = None
 
 
 @dataclass(frozen=True)
@@ -462,6 +476,8 @@ class RobotDescription:
     planner: str = "rules"  # which planner plans, and with which model: shown to the operator
     microphone: str = ""  # the robot's microphone, or why it has none ("" when voice is not set up)
     speaker: str = ""
+    telemetry_layout: dict[str, Any] = field(default_factory=dict)  # robot.telemetry.TelemetryLayout.to_json()
+    telemetry_hz: float = 0.0
 
 
 class EventSubscription(Protocol):
@@ -494,3 +510,7 @@ class RobotPort(Protocol):
     def describe(self) -> RobotDescription: ...
 
     def sensor_feed(self) -> SensorFeed: ...
+
+    def telemetry_since(self, seq: int) -> TelemetryBatch | None:
+        """Telemetry rows numbered `seq` and later (see robot.telemetry), for recording."""
+        ...

@@ -49,6 +49,7 @@ from robot.interface import (
 from robot.planning.pipeline import PlannerConfig
 from robot.speech.robot_voice import VoiceConfig
 from robot.state_board import StateBoard
+from robot.telemetry import TelemetryBatch, TelemetryRing
 
 log = logging.getLogger(__name__)
 
@@ -90,6 +91,7 @@ class WorkerProcess:
         self._send_lock = threading.Lock()
         self._board = StateBoard()
         self._feed = SensorFeed()
+        self._telemetry = TelemetryRing()
         self._description: RobotDescription | None = None
         self._process: mp.process.BaseProcess | None = None
         self._conn: Connection | None = None
@@ -192,6 +194,9 @@ class WorkerProcess:
     def sensor_feed(self) -> SensorFeed:
         return self._feed
 
+    def telemetry_since(self, seq: int) -> TelemetryBatch | None:
+        return self._telemetry.since(seq)
+
     def wait_for(self, predicate: Callable[[RobotState], bool], timeout_s: float) -> bool:
         return self._board.wait_for(predicate, timeout_s)
 
@@ -209,6 +214,8 @@ class WorkerProcess:
                 self._board.publish(message[1])
             elif kind == "event":
                 self._bus.forward(message[1])
+            elif kind == "telemetry":
+                self._telemetry.extend(message[1])
             elif kind == "feed":
                 changed: SensorFeed = message[1]
                 self._feed = SensorFeed(
@@ -303,12 +310,17 @@ def child_main(
 def _forward_state_and_events(worker: Any, subscription: Subscription, send: Any, stop: threading.Event) -> None:
     last_state = None
     last_feed = SensorFeed()
+    telemetry_seq = 0
     while not stop.is_set():
         event = subscription.get(timeout=STATE_PERIOD_S)
         try:
             while event is not None:
                 send(("event", event))
                 event = subscription.get(timeout=0)
+            telemetry = worker.telemetry_since(telemetry_seq)
+            if telemetry is not None:
+                send(("telemetry", telemetry))
+                telemetry_seq = telemetry.next_seq
             state = worker.state()
             if state is not last_state:
                 send(("state", state))

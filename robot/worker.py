@@ -56,6 +56,7 @@ from robot.interface import (
     PlanState,
     PlanStatus,
     Posture,
+    PowerState,
     Proprioception,
     Refusal,
     ReleaseEStop,
@@ -110,11 +111,13 @@ from robot.planning.pipeline import PlannerConfig, PlanningPipeline, PlanResult,
 from robot.planning.planner import Planner, PlanningError
 from robot.planning.validator import validate_plan_json
 from robot.planning.world_context import WorldContext
+from robot.power.battery import Battery, ServoElectrical
 from robot.sim.backend import Measurements, MujocoSimBackend
 from robot.simple_actions import SimpleActions
 from robot.speech.robot_voice import RobotVoice, VoiceConfig
 from robot.state_board import StateBoard
 from robot.task_bodies import ArmBody, NavBodyOfWorker, TaskBody, carry_back_away_m
+from robot.telemetry import TelemetryBatch, TelemetryLayout, TelemetrySampler
 
 MAX_COMMAND_CHARS = 500
 # When the loop falls this many ticks behind, it stops trying to catch up (sim time would race wall time).
@@ -241,6 +244,11 @@ class RobotWorker:
         self._description: RobotDescription | None = None
         self._voice_config = voice
         self._voice: RobotVoice | None = None  # the robot's microphone and speaker, opened on start
+        self._servos = ServoElectrical()
+        self._battery = Battery()
+        layout_of = TelemetryLayout.for_robot(tuple(self.backend.joint_names), self.backend.qpos().size,
+                                              self.backend.mocap_positions().shape[0])  # fmt: skip
+        self._telemetry = TelemetrySampler(layout_of, control_hz)
         self._publish_state(self.backend.read())
 
     # ----------------------------------------------------------------------------------------------------------
@@ -339,6 +347,9 @@ class RobotWorker:
     def sensor_feed(self) -> SensorFeed:
         return self._perception.feed() if self._perception is not None else SensorFeed()
 
+    def telemetry_since(self, seq: int) -> TelemetryBatch | None:
+        return self._telemetry.ring.since(seq)
+
     def describe(self) -> RobotDescription:
         if self._description is None:
             self._description = RobotDescription(
@@ -351,6 +362,8 @@ class RobotWorker:
                 control_hz=self.control_hz,
                 physics_hz=1.0 / self.backend.physics_dt,
                 planner=self.planning.describe(),
+                telemetry_layout=self._telemetry.layout.to_json(),
+                telemetry_hz=self._telemetry.rate_hz,
             )
         if self._voice is None:
             return self._description
@@ -1255,6 +1268,7 @@ class RobotWorker:
             finished = time.perf_counter()
             missed = self.realtime and finished > next_deadline + self.dt
             self._stats.record_tick(finished - started, missed)
+            self._after_tick(finished - started)
             next_deadline += self.dt
             if self.realtime and finished - next_deadline > MAX_TICKS_BEHIND * self.dt:
                 next_deadline = finished + self.dt
@@ -1280,6 +1294,23 @@ class RobotWorker:
         if measured.fallen and not self._fallen:
             self._on_fall(measured)
         self._publish_state(measured)
+
+    def _after_tick(self, tick_s: float) -> None:
+        """What the tick cost the battery, and a telemetry sample when one is due."""
+        m = self._measured
+        if m.joint_torques is not None:
+            self._battery.step(self._servos.power_w(m.joint_torques, m.joint_velocities), self.dt)
+        if not self._telemetry.due():
+            return
+        battery = self._battery.reading
+        self._telemetry.record({
+            "sim_time_s": m.sim_time_s, "wall_time_s": time.time(), "qpos": self.backend.qpos(),
+            "mocap_pos": self.backend.mocap_positions().ravel(), "joint_target": self._targets,
+            "joint_position": m.joint_positions, "joint_velocity": m.joint_velocities,
+            "joint_torque": m.joint_torques if m.joint_torques is not None else np.nan,
+            "com": m.com if m.com is not None else np.nan, "tick_ms": tick_s * 1e3,
+            "battery_v": battery.voltage_v, "battery_a": battery.current_a, "battery_soc": battery.soc,
+        })  # fmt: skip
 
     def _control_targets(self, measured: Measurements) -> np.ndarray:
         """Joint targets: locomotion owns the joints in the walk-ready stance (standing balanced, or walking);
@@ -1388,6 +1419,7 @@ class RobotWorker:
                 mocap_positions=tuple(self.backend.mocap_positions().ravel().tolist()),
                 navigation=self._navigation,
                 approval_required=approval,
+                power=self._power_state(),
                 objects=tuple(ObjectPose(n, p) for n, p in self.backend.object_positions().items()),
                 held_object=self._held_object,
                 plan=plan_status,
@@ -1403,6 +1435,10 @@ class RobotWorker:
                 ),
             )
         )
+
+    def _power_state(self) -> PowerState:
+        b = self._battery.reading
+        return PowerState(voltage_v=b.voltage_v, current_a=b.current_a, soc=b.soc, power_w=b.power_w)
 
     def _perception_state(self) -> PerceptionState | None:
         if self._perception is None:

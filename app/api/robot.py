@@ -113,6 +113,7 @@ def config(rt: RuntimeDep) -> dict[str, Any]:
     description = rt.worker.describe()
     return {
         "viser_ports": {name: m.port for name, m in rt.mirrors.items()},
+        "replay_port": rt.replay.port if rt.replay is not None else None,
         "mirror_software_dpr": rt.settings.mirror_software_dpr,
         "seed": description.seed,
         "robot": description.model_name,

@@ -43,6 +43,10 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
             print(exc, file=sys.stderr)
             return 2
         result = run_planner(get_settings(), backends, repeat=args.repeat, no_fallback=args.no_fallback)
+    elif suite == "sessions":
+        from app.bench.sessions import run_sessions
+
+        result = run_sessions(phase_s=args.duration, session_minutes=args.session_minutes)
     elif suite == "voice":
         from app.bench.voice import run_voice
 

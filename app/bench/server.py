@@ -29,6 +29,7 @@ class ServerProcess:
         self.port = free_port()
         self.viser_port = free_port()
         self.viser_light_port = free_port()
+        self.replay_port = free_port()
         self.url = f"http://127.0.0.1:{self.port}"
         self.seed = seed
         self.log_path = self.workdir / "server.log"
@@ -37,13 +38,14 @@ class ServerProcess:
             "DATABASE_URL": f"sqlite:///{self.workdir / 'server.db'}",
             "HUMANOID_AUDIO_DIR": str(self.workdir / "audio"),
             "HUMANOID_VISER_LIGHT_PORT": str(self.viser_light_port),
+            "HUMANOID_REPLAY_PORT": str(self.replay_port),
             **(extra_env or {}),
         }
         self._process: subprocess.Popen | None = None
 
     def __enter__(self) -> ServerProcess:
         self.workdir.mkdir(parents=True, exist_ok=True)
-        log = self.log_path.open("w")
+        log = self.log_path.open("a")
         command = [sys.executable, "-m", "app.cli", "serve", "--port", str(self.port),
                    "--viser-port", str(self.viser_port), "--seed", str(self.seed)]  # fmt: skip
         self._process = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, env=self._env)
@@ -68,6 +70,12 @@ class ServerProcess:
             except subprocess.TimeoutExpired:
                 self._process.kill()
                 self._process.wait()
+
+    def kill(self) -> None:
+        """SIGKILL, as a crash: nothing gets to close or flush."""
+        if self._process and self._process.poll() is None:
+            self._process.kill()
+            self._process.wait()
 
     def get(self, path: str) -> dict:
         return httpx.get(self.url + path, timeout=5.0).json()

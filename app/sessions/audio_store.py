@@ -35,3 +35,10 @@ def keep_recording(audio_dir: str | Path, session_id: int, source: str | Path) -
     target.parent.mkdir(parents=True, exist_ok=True)
     shutil.move(str(source), target)
     return relative.as_posix()
+
+
+def delete_session_audio(audio_dir: str | Path, session_id: int) -> None:
+    """Remove a deleted session's recordings (its folder)."""
+    folder = Path(audio_dir) / str(session_id)
+    if folder.is_dir():
+        shutil.rmtree(folder, ignore_errors=True)

@@ -5,7 +5,7 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Any
 
-from sqlalchemy import JSON, Boolean, DateTime, Float, ForeignKey, Integer, String, Text
+from sqlalchemy import JSON, Boolean, DateTime, Float, ForeignKey, Index, Integer, LargeBinary, String, Text
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, relationship
 
 
@@ -22,8 +22,17 @@ class SessionRow(Base):
     ended_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
     seed: Mapped[int] = mapped_column(Integer)
     backend: Mapped[str] = mapped_column(String(32))
-    outcome: Mapped[str | None] = mapped_column(String(16))  # succeeded | failed | cancelled | None (open)
+    # succeeded | failed | cancelled | ended | interrupted (the server died: found open at the next start) | None (open)
+    outcome: Mapped[str | None] = mapped_column(String(16))
     summary: Mapped[dict[str, Any] | None] = mapped_column(JSON)
+    robot_model: Mapped[str | None] = mapped_column(String(64))
+    scene_mjcf: Mapped[str | None] = mapped_column(Text)  # the robot and its world as simulated (for replay, export)
+    # robot.telemetry.TelemetryLayout.to_json(): the columns of this session's telemetry chunks, and their rate
+    telemetry_layout: Mapped[dict[str, Any] | None] = mapped_column(JSON)
+    telemetry_hz: Mapped[float | None] = mapped_column(Float)
+    heartbeat_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))  # the recorder's last write
+    recorder_host: Mapped[str | None] = mapped_column(String(255))  # which process records it (while open)
+    recorder_pid: Mapped[int | None] = mapped_column(Integer)
 
     commands: Mapped[list[CommandRow]] = relationship(back_populates="session", cascade="all, delete-orphan")
 
@@ -108,17 +117,35 @@ class TranscriptRow(Base):
     audio_path: Mapped[str | None] = mapped_column(String(512))
 
 
-class StateSampleRow(Base):
-    __tablename__ = "state_samples"
+class TelemetryChunkRow(Base):
+    """Consecutive telemetry samples (about half a second), compressed (app.sessions.telemetry_codec): the robot's
+    and the objects' motion and the signals plotted in review, at 30+ Hz."""
+
+    __tablename__ = "telemetry_chunks"
+    __table_args__ = (Index("ix_telemetry_chunks_session_time", "session_id", "sim_t0"),)
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    session_id: Mapped[int] = mapped_column(ForeignKey("sessions.id", ondelete="CASCADE"))
+    first_seq: Mapped[int] = mapped_column(Integer)
+    count: Mapped[int] = mapped_column(Integer)
+    sim_t0: Mapped[float] = mapped_column(Float)
+    sim_t1: Mapped[float] = mapped_column(Float)
+    wall_t0: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+    wall_t1: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+    data: Mapped[bytes] = mapped_column(LargeBinary)
+
+
+class CameraFrameRow(Base):
+    """A head camera frame as the operator saw it (JPEG), with what was detected in it."""
+
+    __tablename__ = "camera_frames"
 
     id: Mapped[int] = mapped_column(Integer, primary_key=True)
     session_id: Mapped[int] = mapped_column(ForeignKey("sessions.id", ondelete="CASCADE"), index=True)
-    wall_time: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+    seq: Mapped[int] = mapped_column(Integer)
     sim_time_s: Mapped[float] = mapped_column(Float)
-    mode: Mapped[str] = mapped_column(String(16))
-    x: Mapped[float] = mapped_column(Float)
-    y: Mapped[float] = mapped_column(Float)
-    z: Mapped[float] = mapped_column(Float)
-    yaw_rad: Mapped[float] = mapped_column(Float)
-    tilt_deg: Mapped[float] = mapped_column(Float)
-    qpos: Mapped[list[float]] = mapped_column(JSON)
+    wall_time: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+    width: Mapped[int] = mapped_column(Integer)
+    height: Mapped[int] = mapped_column(Integer)
+    jpeg: Mapped[bytes] = mapped_column(LargeBinary)
+    detections: Mapped[list[dict[str, Any]] | None] = mapped_column(JSON)

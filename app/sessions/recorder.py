@@ -1,35 +1,70 @@
-"""Records a session: commands, plans, step results, events and state samples, written in batches by one
-background thread so neither the control loop nor a web request ever waits for the disk."""
+"""Records a session: commands, transcripts, plans, step results, events, telemetry and camera frames.
+
+Durability, so that a crash (kill -9 of the server) loses at most the last second of samples and nothing else:
+- a command is written before the request that sent it is answered;
+- events (and the plans and step results they carry) are written by the recorder thread as soon as they arrive;
+- telemetry is drained from the robot continuously and written as a chunk every half second; the session's
+  heartbeat goes with it, so the next start can tell a crashed session from a running one.
+All writes happen off the control thread; SQLite runs in WAL mode. A write that fails (a locked or full disk) is kept
+and retried, never dropped.
+"""
 
 from __future__ import annotations
 
 import logging
+import os
 import queue
+import socket
 import threading
 import time
-from dataclasses import dataclass
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from typing import Any
 
+import cv2
+import numpy as np
 from sqlalchemy import update
 from sqlalchemy.orm import sessionmaker
 
 from app.sessions.audio_store import keep_recording
 from app.sessions.models import (
+    CameraFrameRow,
     CommandRow,
     EventRow,
     PlanRow,
     SessionRow,
-    StateSampleRow,
     StepResultRow,
+    TelemetryChunkRow,
     TranscriptRow,
 )
+from app.sessions.telemetry_codec import encode_rows
 from robot.interface import CommandReply, Event, RobotPort
 
 log = logging.getLogger(__name__)
 
-FLUSH_INTERVAL_S = 0.25
+TELEMETRY_WRITE_S = 0.5  # a chunk per half second: what a crash can lose, plus the write itself
+POLL_S = 0.05
 TERMINAL_STEP_STATES = {"succeeded", "failed", "skipped", "cancelled"}
+MAINTENANCE_PERIOD_S = 300.0
+MAX_CHUNK_ROWS = 64  # a headless run makes samples faster than real time: chunks stay small anyway
+
+
+def shrink_jpeg(jpeg: bytes, width: int, height: int, target_width: int) -> tuple[bytes, int, int, float]:
+    """A camera frame re-encoded `target_width` wide (when it is wider): (jpeg, width, height, scale). At 1 Hz a
+    640 x 480 frame would be most of what a session stores."""
+    if width <= target_width:
+        return jpeg, width, height, 1.0
+    image = cv2.imdecode(np.frombuffer(jpeg, np.uint8), cv2.IMREAD_COLOR)
+    if image is None:
+        return jpeg, width, height, 1.0
+    scale = target_width / width
+    small = cv2.resize(image, (target_width, round(height * scale)), interpolation=cv2.INTER_AREA)
+    ok, encoded = cv2.imencode(".jpg", small, [cv2.IMWRITE_JPEG_QUALITY, 75])
+    if not ok:
+        return jpeg, width, height, 1.0
+    return encoded.tobytes(), small.shape[1], small.shape[0], scale
 
 
 def _utc(ts: float | None = None) -> datetime:
@@ -43,6 +78,22 @@ class _PlanFinished:
     at: datetime
 
 
+@dataclass(frozen=True)
+class _Heartbeat:
+    at: datetime
+
+
+@dataclass
+class WriteStats:
+    """What the recorder has written, for `humanoid bench sessions`."""
+
+    commits: int = 0
+    rows: int = 0
+    telemetry_samples: int = 0
+    telemetry_bytes: int = 0
+    commit_ms: deque[float] = field(default_factory=lambda: deque(maxlen=10_000))
+
+
 class SessionRecorder:
     """One per server run or `humanoid run`: opens a session row, then records until `close()`."""
 
@@ -53,20 +104,37 @@ class SessionRecorder:
         kind: str,
         seed: int,
         backend: str = "sim",
-        sample_hz: float = 10.0,
         audio_dir: str | None = None,
+        camera_hz: float = 1.0,
+        camera_width: int = 320,
+        maintenance: Callable[[], object] | None = None,
     ) -> None:
         self._factory = session_factory
         self._audio_dir = audio_dir  # where the robot microphone's recordings are moved to, by session
         self._port = port
-        self._sample_period = 1.0 / sample_hz
+        self._camera_period = 1.0 / camera_hz if camera_hz > 0 else None
+        self._camera_width = camera_width  # frames are stored this wide (a quarter of the pixels of 640 x 480)
+        self._maintenance = maintenance  # run once the session is open, then every few minutes
         self._pending: queue.Queue[Any] = queue.Queue()
+        self._write_lock = threading.Lock()  # one writer at a time: the thread, or a command being recorded
         self._stop = threading.Event()
+        self._telemetry_rows: list[np.ndarray] = []
+        self._telemetry_first_seq = 0
+        self._last_camera_seq = -1
+        self.telemetry_gaps = 0  # samples the robot had dropped before they could be read (a stalled recorder)
+        self.stats = WriteStats()
+        description = port.describe()
         with self._factory() as db:
-            row = SessionRow(kind=kind, started_at=_utc(), seed=seed, backend=backend)
+            row = SessionRow(kind=kind, started_at=_utc(), seed=seed, backend=backend,
+                             robot_model=description.model_name, scene_mjcf=description.mjcf_xml or None,
+                             telemetry_layout=description.telemetry_layout or None,
+                             telemetry_hz=description.telemetry_hz or None, heartbeat_at=_utc(),
+                             recorder_host=socket.gethostname(), recorder_pid=os.getpid())  # fmt: skip
             db.add(row)
             db.commit()
             self.session_id: int = row.id
+        # Telemetry from the moment the session opens (the robot may have run before: that is not this session's).
+        self._telemetry_seq = self._first_new_telemetry_seq()
         self._subscription = port.subscribe()
         # Events from before this session opened (the worker starting, its scheduling priority) belong to it too.
         self._history_seq = 0
@@ -79,64 +147,122 @@ class SessionRecorder:
     # ----------------------------------------------------------------------------------------------------------
 
     def record_command(self, text: str, source: str, reply: CommandReply) -> None:
-        """Every command, accepted or refused, with the reasons it was refused."""
-        self._pending.put(
-            CommandRow(
-                session_id=self.session_id,
-                robot_command_id=reply.command_id,
-                received_at=_utc(),
-                source=source,
-                text=text,
-                accepted=reply.accepted,
-                refusal=reply.refusal.value if reply.refusal else None,
-                errors=list(reply.errors) or None,
-            )
-        )
+        """Every command, accepted or refused, with the reasons it was refused: on disk before this returns (or,
+        when the database cannot take it now, queued for the next write)."""
+        row = CommandRow(session_id=self.session_id, robot_command_id=reply.command_id, received_at=_utc(),
+                         source=source, text=text, accepted=reply.accepted,
+                         refusal=reply.refusal.value if reply.refusal else None,
+                         errors=list(reply.errors) or None)  # fmt: skip
+        self._pending.put(row)
+        self._flush()
 
     def record_transcript(self, heard: dict[str, Any], source: str, audio_path: str | None) -> None:
         """What the recogniser heard (`humanoid transcribe`'s fields) and where its recording is kept."""
-        self._pending.put(
-            TranscriptRow(session_id=self.session_id, received_at=_utc(), source=source, text=heard["text"],
-                          confidence=heard["confidence"], engine=heard["engine"], in_grammar=heard["in_grammar"],
-                          audio_s=heard["audio_s"], decode_ms=heard["decode_ms"], audio_path=audio_path)
-        )  # fmt: skip
+        self._pending.put(self._transcript_row(heard, source, audio_path, _utc()))
+        self._flush()
+
+    def _transcript_row(self, heard: dict[str, Any], source: str, audio_path: str | None,
+                        at: datetime) -> TranscriptRow:  # fmt: skip
+        return TranscriptRow(session_id=self.session_id, received_at=at, source=source, text=heard["text"],
+                             confidence=heard["confidence"], engine=heard["engine"], in_grammar=heard["in_grammar"],
+                             audio_s=heard["audio_s"], decode_ms=heard["decode_ms"], audio_path=audio_path)  # fmt: skip
 
     def close(self, outcome: str | None = None, summary: dict[str, Any] | None = None) -> None:
         """Flush everything, then mark the session ended."""
         self._stop.set()
         self._thread.join(timeout=10.0)
         self._drain_events()
+        self._drain_telemetry()
+        self._queue_telemetry_chunk()
         self._flush()
         self._subscription.close()
-        with self._factory() as db:
+        with self._write_lock, self._factory() as db:
             db.execute(
                 update(SessionRow)
                 .where(SessionRow.id == self.session_id)
-                .values(ended_at=_utc(), outcome=outcome, summary=summary)
+                .values(ended_at=_utc(), outcome=outcome or "ended", summary=summary, heartbeat_at=_utc())
             )
             db.commit()
 
     # ----------------------------------------------------------------------------------------------------------
 
     def _run(self) -> None:
-        next_sample = time.monotonic()
-        next_flush = time.monotonic() + FLUSH_INTERVAL_S
+        next_chunk = time.monotonic() + TELEMETRY_WRITE_S
+        next_camera = time.monotonic()
+        next_maintenance = time.monotonic()
         while not self._stop.is_set():
-            event = self._subscription.get(timeout=0.02)
+            event = self._subscription.get(timeout=POLL_S)
+            wrote_events = event is not None
             if event is not None:
                 self._on_event(event)
                 self._drain_events()
+            self._drain_telemetry()
             now = time.monotonic()
-            if now >= next_sample:
-                self._sample()
-                next_sample = now + self._sample_period
-            if now >= next_flush:
+            if self._camera_period is not None and now >= next_camera:
+                self._sample_camera()
+                next_camera = now + self._camera_period
+            chunk_due = now >= next_chunk or sum(len(r) for r in self._telemetry_rows) >= MAX_CHUNK_ROWS
+            if chunk_due:
+                self._queue_telemetry_chunk()
+                self._pending.put(_Heartbeat(_utc()))
+                next_chunk = now + TELEMETRY_WRITE_S
+            if wrote_events or chunk_due or not self._pending.empty():
                 self._flush()
-                next_flush = now + FLUSH_INTERVAL_S
+            if self._maintenance is not None and now >= next_maintenance:
+                next_maintenance = now + MAINTENANCE_PERIOD_S
+                try:
+                    self._maintenance()
+                except Exception:
+                    log.exception("session maintenance failed")
 
     def _drain_events(self) -> None:
         while (event := self._subscription.get(timeout=0)) is not None:
             self._on_event(event)
+
+    def _first_new_telemetry_seq(self) -> int:
+        batch = self._port.telemetry_since(0)
+        return batch.next_seq if batch is not None else 0
+
+    def _drain_telemetry(self) -> None:
+        batch = self._port.telemetry_since(self._telemetry_seq)
+        if batch is None:
+            return
+        if batch.first_seq > self._telemetry_seq:
+            self.telemetry_gaps += batch.first_seq - self._telemetry_seq
+            self._queue_telemetry_chunk()  # a chunk holds consecutive samples only
+        if not self._telemetry_rows:
+            self._telemetry_first_seq = batch.first_seq
+        self._telemetry_rows.append(batch.rows)
+        self._telemetry_seq = batch.next_seq
+
+    def _queue_telemetry_chunk(self) -> None:
+        if not self._telemetry_rows:
+            return
+        rows = np.concatenate(self._telemetry_rows)
+        self._telemetry_rows = []
+        first = self._telemetry_first_seq
+        self._telemetry_first_seq += len(rows)
+        for start in range(0, len(rows), MAX_CHUNK_ROWS):
+            part = rows[start : start + MAX_CHUNK_ROWS]
+            self._pending.put(
+                TelemetryChunkRow(session_id=self.session_id, first_seq=first + start, count=len(part),
+                                  sim_t0=float(part[0, 0]), sim_t1=float(part[-1, 0]), wall_t0=_utc(part[0, 1]),
+                                  wall_t1=_utc(part[-1, 1]), data=encode_rows(part))
+            )  # fmt: skip
+
+    def _sample_camera(self) -> None:
+        image = self._port.sensor_feed().camera
+        if image is None or image.seq == self._last_camera_seq:
+            return
+        self._last_camera_seq = image.seq
+        jpeg, width, height, scale = shrink_jpeg(image.jpeg, image.width, image.height, self._camera_width)
+        detections = [{"label": d.label, "confidence": d.confidence, "position": list(d.position),
+                       "box": [round(v * scale) for v in d.box], "distance_m": d.distance_m}
+                      for d in image.detections]  # fmt: skip
+        self._pending.put(
+            CameraFrameRow(session_id=self.session_id, seq=image.seq, sim_time_s=image.sim_time_s, wall_time=_utc(),
+                           width=width, height=height, jpeg=jpeg, detections=detections)
+        )  # fmt: skip
 
     def _on_event(self, event: Event) -> None:
         if event.seq <= self._history_seq:  # already taken from the history
@@ -145,7 +271,8 @@ class SessionRecorder:
         data = dict(event.data)
         if event.kind == "speech/heard":  # the robot's microphone: the transcript and its recording
             data["audio_path"] = self._keep(data.get("audio_path"))
-            self.record_transcript(data, data.get("source", "robot-mic"), data["audio_path"])
+            self._pending.put(self._transcript_row(data, data.get("source", "robot-mic"), data["audio_path"],
+                                                   _utc(event.wall_time_s)))  # fmt: skip
         elif event.kind == "speech/command":  # ... and the command it ran on hearing it
             self._pending.put(
                 CommandRow(session_id=sid, robot_command_id=data.get("command_id"), received_at=_utc(event.wall_time_s),
@@ -181,38 +308,53 @@ class SessionRecorder:
             log.warning("cannot keep the recording %s: %s", spooled, exc)
             return None
 
-    def _sample(self) -> None:
-        s = self._port.state()
-        x, y, z = s.base_position
-        self._pending.put(
-            StateSampleRow(session_id=self.session_id, wall_time=_utc(s.wall_time_s), sim_time_s=s.sim_time_s,
-                           mode=s.mode.value, x=x, y=y, z=z, yaw_rad=s.base_yaw_rad, tilt_deg=s.tilt_deg,
-                           qpos=list(s.qpos))
-        )  # fmt: skip
+    def _count(self, items: list[Any], seconds: float) -> None:
+        stats = self.stats
+        stats.commits += 1
+        stats.commit_ms.append(seconds * 1e3)
+        for item in items:
+            stats.rows += 1
+            if isinstance(item, TelemetryChunkRow):
+                stats.telemetry_samples += item.count
+                stats.telemetry_bytes += len(item.data)
 
     def _flush(self) -> None:
-        items = []
-        while True:
+        with self._write_lock:
+            items = []
+            while True:
+                try:
+                    items.append(self._pending.get_nowait())
+                except queue.Empty:
+                    break
+            if not items:
+                return
+            started = time.perf_counter()
             try:
-                items.append(self._pending.get_nowait())
-            except queue.Empty:
-                break
-        if not items:
-            return
-        try:
-            with self._factory() as db:
-                for item in items:
-                    if isinstance(item, _PlanFinished):
-                        db.flush()
-                        db.execute(
-                            update(PlanRow)
-                            .where(PlanRow.session_id == self.session_id, PlanRow.robot_plan_id == item.robot_plan_id)
-                            .values(state=item.state, finished_at=item.at)
-                        )
-                    else:
-                        db.add(item)
-                db.commit()
-        except Exception:  # keep the items: the next flush retries them
-            log.exception("session write failed; will retry")
-            for item in items:
-                self._pending.put(item)
+                with self._factory() as db:
+                    for item in items:
+                        if isinstance(item, _PlanFinished):
+                            db.flush()
+                            db.execute(
+                                update(PlanRow)
+                                .where(PlanRow.session_id == self.session_id,
+                                       PlanRow.robot_plan_id == item.robot_plan_id)
+                                .values(state=item.state, finished_at=item.at)
+                            )  # fmt: skip
+                        elif isinstance(item, _Heartbeat):
+                            db.execute(
+                                update(SessionRow).where(SessionRow.id == self.session_id).values(heartbeat_at=item.at)
+                            )
+                        else:
+                            db.add(item)
+                    db.commit()
+                self._count(items, time.perf_counter() - started)
+            except Exception:  # keep the items, in order, ahead of anything newer: the next flush retries them
+                log.exception("session write failed; will retry")
+                rest = []
+                while True:
+                    try:
+                        rest.append(self._pending.get_nowait())
+                    except queue.Empty:
+                        break
+                for item in items + rest:
+                    self._pending.put(item)

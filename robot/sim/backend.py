@@ -42,6 +42,8 @@ class Measurements:
     imu_gyro: np.ndarray  # (3,) rad/s in the trunk frame
     imu_accel: np.ndarray  # (3,) m/s^2 in the trunk frame (specific force: +9.8 up when still)
     foot_forces: np.ndarray  # (2, 4) N on each sole's four force pads, left then right
+    joint_torques: np.ndarray | None = None  # (n_joints,) Nm the servos exert (what their current says)
+    com: np.ndarray | None = None  # (3,) the robot's centre of mass in the world frame
 
     @property
     def tilt_deg(self) -> float:
@@ -71,6 +73,7 @@ class MujocoSimBackend:
         self._joint_dof = np.array([self.model.joint(n).dofadr[0] for n in humanoid_v1.JOINT_NAMES])
         self._actuator = np.array([self.model.actuator(n + "_act").id for n in humanoid_v1.JOINT_NAMES])
         self._trunk = self.model.body(humanoid_v1.TRUNK_BODY).id
+        self._robot_root = self._root_of(self._trunk)
         self._object_bodies = {o.name: self.model.body(object_body_name(o.name)).id for o in layout.objects}
         self.joint_names = humanoid_v1.JOINT_NAMES
         self._gyro = self._sensor_slice("imu_gyro")
@@ -91,6 +94,12 @@ class MujocoSimBackend:
         self.data.mocap_pos[self._spares[index]] = (x, y, SPARE_OBSTACLE_HALF[2])
         self._spares_placed += 1
         return index
+
+    def _root_of(self, body: int) -> int:
+        """The robot's root body (a child of the world): its subtree's centre of mass is the robot's."""
+        while self.model.body_parentid[body] != 0:
+            body = int(self.model.body_parentid[body])
+        return body
 
     def _sensor_slice(self, name: str) -> slice:
         sensor = self.model.sensor(name)
@@ -138,6 +147,8 @@ class MujocoSimBackend:
             imu_gyro=d.sensordata[self._gyro].copy(),
             imu_accel=d.sensordata[self._accel].copy(),
             foot_forces=np.array([d.sensordata[s][0] for s in self._fsr]).reshape(2, 4),
+            joint_torques=d.actuator_force[self._actuator].copy(),
+            com=d.subtree_com[self._robot_root].copy(),
         )
 
     def write(self, joint_targets: np.ndarray) -> None:

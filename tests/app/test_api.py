@@ -139,7 +139,7 @@ def test_sessions_record_commands_plans_steps_and_events(client) -> None:
         kinds = {e["kind"] for e in detail["events"]}
         return (
             {"worker/started", "control/priority", "plan/finished", "estop/latched"} <= kinds
-            and detail["state_sample_count"] > 0
+            and detail["telemetry"]["samples"] > 0
             and detail
         )
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import httpx
 import pytest
 
@@ -175,15 +177,46 @@ def test_camera_stream_with_detections_map_and_a_search_from_the_page(page, serv
     expect(page.locator("#known-objects")).to_contain_text("green apple: kitchen counter")
 
 
-def test_sessions_page_shows_the_timeline(page, server) -> None:
+def test_sessions_page_shows_the_timeline_and_replays_from_an_entry(page, server) -> None:
     expect = playwright_api.expect
     page.goto(server.url + "/sessions")
     first_row = page.locator("#sessions tr").first
     expect(first_row).to_contain_text("serve")
+    expect(first_row.locator("button.danger")).to_be_disabled()  # the live session cannot be deleted
     first_row.click()
-    expect(page.locator("#commands")).to_contain_text("say hello from the browser")
-    expect(page.locator("#timeline")).to_contain_text("estop/latched")
+    timeline = page.locator("#timeline")
+    expect(timeline).to_contain_text('"say hello from the browser" from browser: accepted')
+    expect(timeline.locator("li.tl-estop").first).to_contain_text("e-stop")
     expect(page.locator("#plans")).to_contain_text("navigate_to(kitchen counter): cancelled")
+    expect(page.locator("#replay-time")).to_contain_text(" / ")  # the replay has the session loaded
+    entry = timeline.locator("li.tl-estop").first
+    target = float(entry.get_attribute("data-t"))
+    entry.click()
+    expect(page.locator("#replay-time")).to_contain_text(f"{target:.2f} /")
+    expect(entry).to_have_class(re.compile("tl-active"))
+    frame = page.frame_locator("#replay-frame")
+    expect(frame.get_by_text("Session", exact=False).first).to_be_visible(timeout=30000)
+
+
+def test_sessions_are_filtered_imported_and_deleted_from_the_page(page, server) -> None:
+    expect = playwright_api.expect
+    page.goto(server.url + "/sessions")
+    expect(page.locator("#sessions tr").first).to_contain_text("serve")
+    page.fill("#f-q", "no such command at all")
+    page.click("#filters button[type=submit]")
+    expect(page.locator("#total")).to_have_text("0")
+    page.click("#f-reset")
+    expect(page.locator("#total")).not_to_have_text("0")
+    live = server.get("/api/health")["session_id"]
+    exported = httpx.get(f"{server.url}/api/sessions/{live}/export?format=json", timeout=60).content
+    page.set_input_files("#import-file", files=[{"name": "s.json", "mimeType": "application/json", "buffer": exported}])
+    expect(page.locator("#list-result")).to_contain_text("imported as session")
+    imported = page.locator("#sessions tr", has_text="import")
+    expect(imported).to_have_count(1)
+    page.once("dialog", lambda dialog: dialog.accept())
+    imported.locator("button.danger").click()
+    expect(page.locator("#list-result")).to_contain_text("deleted")
+    expect(page.locator("#sessions tr", has_text="import")).to_have_count(0)
 
 
 def test_cli_estop_latches_and_releases_a_running_server(server) -> None:

@@ -1,0 +1,1 @@
+"""Power: the servos' electrical load and the battery pack that feeds them."""
