@@ -42,8 +42,9 @@ def run_command(
         if heard is not None:
             transcript, wav = heard
             recorder.record_transcript(transcript, "cli", save_recording(settings.audio_dir, recorder.session_id, wav))
+        received = time.time()
         reply = worker.submit(RunCommand(text))
-        recorder.record_command(text, "cli-audio" if heard else "cli", reply)
+        recorder.record_command(text, "cli-audio" if heard else "cli", reply, received_at=received)
         finished = reply.accepted and worker.wait_for(
             lambda s: (
                 s.plan is not None

@@ -143,13 +143,14 @@ def events(rt: RuntimeDep) -> list[dict[str, Any]]:
 @router.post("/commands", status_code=202)
 def post_command(body: CommandIn, rt: RuntimeDep) -> dict[str, Any]:
     """Plan (or check the given plan) and start executing it. 422: not understood or invalid; 409: e-stop."""
+    received = time.time()  # (recorded as when it came, before the plan made of it)
     if body.plan is not None:
         reply = rt.worker.submit(ExecutePlan(body.plan, body.text, command_id=body.command_id))
     elif body.command_id is not None:
         raise HTTPException(422, detail={"message": "command_id revises a plan: send the edited plan with it"})
     else:
         reply = rt.worker.submit(RunCommand(body.text))
-    rt.recorder.record_command(body.text or "(plan)", body.source, reply)
+    rt.recorder.record_command(body.text or "(plan)", body.source, reply, received_at=received)
     raise_if_refused(reply)
     return reply_json(reply)
 

@@ -226,28 +226,29 @@ class _Bodies:
         self.model = model
         self.data = mujoco.MjData(model)
         self.names = ["world"] + [model.body(i).name or f"body_{i}" for i in range(1, model.nbody)]
+        self.parents = np.asarray(model.body_parentid[1:], dtype=int)
 
-    def transforms(self, qpos: np.ndarray, mocap: np.ndarray | None, stamp: Timestamp) -> FrameTransforms:
+    def relative_poses(self, qpos: np.ndarray, mocap: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+        """Each body's (1..nbody-1) translation and rotation (wxyz) in its parent's frame."""
         m, d = self.model, self.data
         n = min(qpos.size, m.nq)
         d.qpos[:n] = np.nan_to_num(qpos[:n])
         if mocap is not None and mocap.size == d.mocap_pos.size and np.all(np.isfinite(mocap)):
             d.mocap_pos[:] = mocap.reshape(d.mocap_pos.shape)
         mujoco.mj_kinematics(m, d)
-        out = []
-        for b in range(1, m.nbody):
-            parent = int(m.body_parentid[b])
-            rot_p = d.xmat[parent].reshape(3, 3)
-            translation = rot_p.T @ (d.xpos[b] - d.xpos[parent])
-            relative = np.zeros(4)
-            inverse = np.zeros(4)
-            mujoco.mju_negQuat(inverse, d.xquat[parent])
-            mujoco.mju_mulQuat(relative, inverse, d.xquat[b])
-            out.append(FrameTransform(timestamp=stamp, parent_frame_id=self.names[parent],
-                                      child_frame_id=self.names[b],
-                                      translation=Vector3(x=float(translation[0]), y=float(translation[1]),
-                                                          z=float(translation[2])),
-                                      rotation=_quat(relative)))  # fmt: skip
+        parents = self.parents
+        rot_p = d.xmat[parents].reshape(-1, 3, 3)
+        translation = np.einsum("bji,bj->bi", rot_p, d.xpos[1:] - d.xpos[parents])
+        return translation, _quat_multiply(_quat_conjugate(d.xquat[parents]), d.xquat[1:])
+
+    def transforms(self, qpos: np.ndarray, mocap: np.ndarray | None, stamp: Timestamp) -> FrameTransforms:
+        translation, rotation = self.relative_poses(qpos, mocap)
+        names = self.names
+        out = [
+            FrameTransform(timestamp=stamp, parent_frame_id=names[p], child_frame_id=names[b + 1],
+                           translation=Vector3(x=float(t[0]), y=float(t[1]), z=float(t[2])), rotation=_quat(q))
+            for b, (p, t, q) in enumerate(zip(self.parents, translation, rotation, strict=True))
+        ]  # fmt: skip
         return FrameTransforms(transforms=out)
 
     def scene(self, stamp: Timestamp) -> SceneUpdate:
@@ -301,6 +302,18 @@ class _Bodies:
             points = [Point3(x=float(v[0]), y=float(v[1]), z=float(v[2])) for v in verts]
             prims["triangles"].append(TriangleListPrimitive(pose=pose, points=points, color=color,
                                                             indices=[int(i) for i in faces.ravel()]))  # fmt: skip
+
+
+def _quat_conjugate(q: np.ndarray) -> np.ndarray:
+    return q * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+def _quat_multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise Hamilton products of (n, 4) wxyz quaternions."""
+    w1, x1, y1, z1 = a.T
+    w2, x2, y2, z2 = b.T
+    return np.stack([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2], axis=1)  # fmt: skip
 
 
 def _vec(values: Any) -> Vector3:

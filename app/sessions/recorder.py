@@ -146,10 +146,10 @@ class SessionRecorder:
 
     # ----------------------------------------------------------------------------------------------------------
 
-    def record_command(self, text: str, source: str, reply: CommandReply) -> None:
+    def record_command(self, text: str, source: str, reply: CommandReply, received_at: float | None = None) -> None:
         """Every command, accepted or refused, with the reasons it was refused: on disk before this returns (or,
-        when the database cannot take it now, queued for the next write)."""
-        row = CommandRow(session_id=self.session_id, robot_command_id=reply.command_id, received_at=_utc(),
+        when the database cannot take it now, queued for the next write). `received_at`: when it came (epoch s)."""
+        row = CommandRow(session_id=self.session_id, robot_command_id=reply.command_id, received_at=_utc(received_at),
                          source=source, text=text, accepted=reply.accepted,
                          refusal=reply.refusal.value if reply.refusal else None,
                          errors=list(reply.errors) or None)  # fmt: skip

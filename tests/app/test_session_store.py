@@ -4,6 +4,7 @@ test_postgres.py (the same checks, through `check_store_round_trip`)."""
 
 from __future__ import annotations
 
+import itertools
 import json
 import os
 import socket
@@ -54,7 +55,7 @@ def test_a_session_records_motion_at_30_hz_of_simulated_time_and_what_happened(r
     assert heard["audio_url"].endswith("/audio.wav")
     times = [i["sim_time_s"] for i in detail["timeline"]]
     # in time order (to the centisecond: a command comes before the plan made of it at the same moment)
-    assert all(b >= a - 0.01 for a, b in zip(times, times[1:], strict=False))
+    assert all(b >= a - 0.01 for a, b in itertools.pairwise(times))
     assert all(sim[0] - 1 <= t <= sim[-1] + 1 for t in times)
     with factory() as db:
         series = telemetry_series(db, sid, ["battery_v", "com"], max_points=20)
@@ -244,3 +245,31 @@ def test_camera_frames_are_stored_at_a_quarter_of_the_pixels() -> None:
     assert (width, height, scale) == (320, 240, 0.5) and len(small) < len(jpeg) / 2
     assert cv2.imdecode(np.frombuffer(small, np.uint8), cv2.IMREAD_COLOR).shape == (240, 320, 3)
     assert shrink_jpeg(small, 320, 240, 320) == (small, 320, 240, 1.0)  # small enough already
+
+
+def test_exported_transforms_compose_back_to_the_bodies_world_poses(scene_model) -> None:
+    import mujoco
+
+    from app.sessions.mcap_export import _Bodies
+
+    bodies = _Bodies(scene_model)
+    qpos = scene_model.qpos0.copy()
+    qpos[:3] = (0.4, -0.3, 0.28)
+    qpos[3:7] = (np.cos(0.3), 0.0, 0.0, np.sin(0.3))
+    qpos[7:] += 0.2  # bend every joint a little
+    translation, rotation = bodies.relative_poses(qpos, None)
+    body = scene_model.body("r_ank_roll_link").id
+    chain = []
+    b = body
+    while b != 0:
+        chain.append(b)
+        b = int(scene_model.body_parentid[b])
+    position, frame = np.zeros(3), np.eye(3)
+    for b in reversed(chain):  # world -> trunk -> ... -> ankle
+        local = np.zeros(9)
+        mujoco.mju_quat2Mat(local, rotation[b - 1])
+        position = position + frame @ translation[b - 1]
+        frame = frame @ local.reshape(3, 3)
+    assert len(chain) >= 6
+    assert np.allclose(position, bodies.data.xpos[body], atol=1e-9)
+    assert np.allclose(frame, bodies.data.xmat[body].reshape(3, 3), atol=1e-9)

@@ -185,8 +185,8 @@ def test_sessions_page_shows_the_timeline_and_replays_from_an_entry(page, server
     expect(first_row.locator("button.danger")).to_be_disabled()  # the live session cannot be deleted
     first_row.click()
     timeline = page.locator("#timeline")
-    expect(timeline).to_contain_text('"say hello from the browser" from browser: accepted')
-    expect(timeline.locator("li.tl-estop").first).to_contain_text("e-stop")
+    expect(timeline).to_contain_text('"say hello from the browser" from typed: accepted')
+    expect(timeline.locator("li.tl-estop").first).to_contain_text("E-STOP latched")
     expect(page.locator("#plans")).to_contain_text("navigate_to(kitchen counter): cancelled")
     expect(page.locator("#replay-time")).to_contain_text(" / ")  # the replay has the session loaded
     entry = timeline.locator("li.tl-estop").first
@@ -263,7 +263,7 @@ def test_a_command_spoken_into_the_microphone_is_heard_and_run(server, playwrigh
         # what was said is kept with the session, and can be listened to again
         session_id = httpx.get(f"{server.url}/api/health").json()["session_id"]
         page.goto(f"{server.url}/sessions?id={session_id}")
-        heard = page.locator("#transcripts li").filter(has_text='"wait for three seconds"')
+        heard = page.locator("#timeline li.tl-heard").filter(has_text='heard "wait for three seconds"')
         expect(heard).to_have_count(1, timeout=15_000)
         expect(heard.locator("audio")).to_have_count(1)
     finally:
