@@ -31,6 +31,7 @@ log = logging.getLogger(__name__)
 
 FRAME_HZ = 30.0  # scene updates per second while playing
 PLOT_WINDOW_S = 20.0  # the plots show this much before the replay's time, and a little after
+GUI_EVERY_S = 0.2  # the controls' time and "now" while playing (each update is a message to every viewer)
 PLOT_EVERY_S = 1.0  # while playing; a seek redraws them at once
 SPEEDS = ("0.25", "0.5", "1", "2", "4")
 SECONDS = {"x": uplot.Scale(time=False)}  # the x axis is simulated seconds, not a date
@@ -330,6 +331,7 @@ class SessionReplay:
     def _run(self) -> None:
         period = 1.0 / FRAME_HZ
         last: float | None = None
+        last_gui = -np.inf
         while not self._stop.wait(period):
             with self._lock:  # (loading a session holds it for seconds: that time is not replay time)
                 now = time.perf_counter()
@@ -343,6 +345,8 @@ class SessionReplay:
                     if self._t >= self._track.end:
                         self._playing = False
                     self._show()
-                    self._sync_gui()
+                    if not self._playing or now - last_gui >= GUI_EVERY_S:
+                        self._sync_gui()
+                        last_gui = now
                 except Exception:  # a viewer glitch must not end the replay thread
                     log.exception("replay frame failed")

@@ -33,7 +33,27 @@ def _ms(values: list[float]) -> dict[str, float]:
 
 
 def _db_bytes(path: Path) -> int:
-    return sum(p.stat().st_size for p in path.parent.glob(path.name + "*") if p.is_file())  # the WAL too
+    """The database's size with everything written moved from the WAL into it (the WAL file is reused, not
+    shrunk, so its size says nothing about what is stored)."""
+    import sqlite3
+
+    with sqlite3.connect(path) as connection:
+        connection.execute("PRAGMA wal_checkpoint(TRUNCATE)")
+    return sum(p.stat().st_size for p in path.parent.glob(path.name + "*") if p.is_file())
+
+
+def _stored_bytes(factory: Any, session_id: int) -> dict[str, int]:
+    from sqlalchemy import func, select
+
+    from app.sessions.models import CameraFrameRow, TelemetryChunkRow
+
+    with factory() as db:
+        telemetry = db.scalar(select(func.sum(func.length(TelemetryChunkRow.data)))
+                              .where(TelemetryChunkRow.session_id == session_id)) or 0  # fmt: skip
+        camera = db.scalar(select(func.sum(func.length(CameraFrameRow.jpeg)))
+                           .where(CameraFrameRow.session_id == session_id)) or 0  # fmt: skip
+        frames = db.scalar(select(func.count(CameraFrameRow.id)).where(CameraFrameRow.session_id == session_id)) or 0
+    return {"telemetry": int(telemetry), "camera": int(camera), "camera_frames": int(frames)}
 
 
 def _drive(port: Any, seconds: float, clock: Any) -> None:
@@ -75,6 +95,7 @@ def recording_in_real_time(phase_s: float, workdir: Path, seed: int = 0) -> dict
         stats = recorder.stats
         recorder.close()
         grown = _db_bytes(db_path) - size0
+        stored = _stored_bytes(factory, recorder.session_id)
     finally:
         worker.stop()
         engine.dispose()
@@ -99,6 +120,9 @@ def recording_in_real_time(phase_s: float, workdir: Path, seed: int = 0) -> dict
             "telemetry_gaps": recorder.telemetry_gaps,
         },
         "db_mb_per_minute": round(grown / 1e6 / (elapsed / 60), 3),
+        "telemetry_mb_per_minute": round(stored["telemetry"] / 1e6 / (elapsed / 60), 3),
+        "camera_mb_per_minute": round(stored["camera"] / 1e6 / (elapsed / 60), 3),
+        "camera_kb_per_frame": round(stored["camera"] / 1e3 / max(stored["camera_frames"], 1), 1),
     }
 
 
@@ -106,7 +130,7 @@ def long_session(minutes: float, db_path: Path, seed: int = 0) -> dict[str, Any]
     """A session of `minutes` of simulated time, recorded headless."""
     from app.sessions.db import make_engine, make_session_factory, upgrade_to_head
     from app.sessions.recorder import SessionRecorder
-    from robot.interface import RunCommand, StopTeleop
+    from robot.interface import ResetRobot, RunCommand, StopTeleop
     from robot.model.world import generate_world
     from robot.worker import RobotWorker
 
@@ -120,22 +144,27 @@ def long_session(minutes: float, db_path: Path, seed: int = 0) -> dict[str, Any]
     started = time.perf_counter()
     worker.start()
     sim_clock = lambda: worker.state().sim_time_s  # noqa: E731
+    falls = 0
     try:
         for minute in range(int(np.ceil(minutes))):
             _drive(worker, min(50.0, minutes * 60 - sim_clock()), sim_clock)
             worker.submit(StopTeleop(source="bench"))
-            worker.wait_for(lambda s: s.mode.value == "idle", 60.0)
+            worker.wait_for(lambda s: s.mode.value in ("idle", "fallen"), 120.0)
+            if worker.state().fallen:  # stood up again, as an operator would, and the session goes on
+                falls += 1
+                worker.submit(ResetRobot())
+                worker.wait_for(lambda s: not s.fallen and s.mode.value == "idle", 120.0)
             reply = worker.submit(RunCommand(f"say minute {minute + 1} done"))
             recorder.record_command(f"say minute {minute + 1} done", "bench", reply)
-            end = (minute + 1) * 60.0
-            worker.wait_for(lambda s, end=end: s.sim_time_s >= min(end, minutes * 60), 600.0)
+            end = min((minute + 1) * 60.0, minutes * 60)
+            worker.wait_for(lambda s, end=end: s.sim_time_s >= end, 600.0)
         wall = time.perf_counter() - started
         recorder.close(outcome="succeeded")
     finally:
         worker.stop()
         engine.dispose()
     return {"session_id": recorder.session_id, "sim_minutes": round(sim_clock() / 60, 2), "wall_s": round(wall, 1),
-            "mb_per_minute": round(_db_bytes(db_path) / 1e6 / minutes, 3)}  # fmt: skip
+            "falls": falls, "mb_per_minute": round(_db_bytes(db_path) / 1e6 / minutes, 3)}  # fmt: skip
 
 
 def review(workdir: Path, session_id: int) -> dict[str, Any]:

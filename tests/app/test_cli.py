@@ -157,3 +157,28 @@ def test_transcribe_prints_text_and_confidence_and_run_takes_a_spoken_command(tm
 
     missing = humanoid(tmp_path, "transcribe", str(tmp_path / "nope.wav"))
     assert missing.returncode == 2 and "no such audio file" in missing.stderr
+
+
+def test_sessions_are_listed_shown_exported_imported_and_deleted_from_the_command_line(tmp_path) -> None:
+    assert humanoid(tmp_path, "run", "say hello from the cli", "--json").returncode == 0
+    listed = json.loads(humanoid(tmp_path, "sessions", "list", "--json").stdout)
+    assert listed["total"] == 1 and listed["items"][0]["first_command"] == "say hello from the cli"
+    assert json.loads(humanoid(tmp_path, "sessions", "list", "--json", "--had-estop", "yes").stdout)["total"] == 0
+    shown = humanoid(tmp_path, "sessions", "show", "1")
+    assert shown.returncode == 0 and '"say hello from the cli" from cli: accepted' in shown.stdout
+    for fmt in ("json", "mcap"):
+        out = tmp_path / f"s1.{fmt}"
+        done = humanoid(tmp_path, "sessions", "export", "1", "--format", fmt, "-o", str(out))
+        assert done.returncode == 0, done.stderr
+        assert out.stat().st_size > 10_000
+    assert (tmp_path / "s1.mcap").read_bytes()[:8] == b"\x89MCAP0\r\n"
+    imported = humanoid(tmp_path, "sessions", "import", str(tmp_path / "s1.json"), "--json")
+    assert json.loads(imported.stdout) == {"session_id": 2}
+    assert humanoid(tmp_path, "sessions", "delete", "2").returncode == 1  # asks for --yes first
+    assert humanoid(tmp_path, "sessions", "delete", "2", "--yes").returncode == 0
+    assert humanoid(tmp_path, "sessions", "export", "9", "-o", str(tmp_path / "x.json")).returncode == 1
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"format": "zip"}')
+    refused = humanoid(tmp_path, "sessions", "import", str(bad))
+    assert refused.returncode == 1 and "not a session export" in refused.stderr
+    assert json.loads(humanoid(tmp_path, "sessions", "list", "--json").stdout)["total"] == 1
