@@ -332,7 +332,9 @@ class SessionReplay:
         period = 1.0 / FRAME_HZ
         last: float | None = None
         last_gui = -np.inf
-        while not self._stop.wait(period):
+        next_frame = time.perf_counter()
+        while not self._stop.wait(max(0.0, next_frame - time.perf_counter())):
+            next_frame = max(next_frame + period, time.perf_counter())  # a frame's work is part of its period
             with self._lock:  # (loading a session holds it for seconds: that time is not replay time)
                 now = time.perf_counter()
                 if not self._playing or self._track is None:
