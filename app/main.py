@@ -11,7 +11,7 @@ from fastapi.responses import FileResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from app.api import perception, robot, sessions, speech
+from app.api import diagnostics, perception, robot, sessions, speech
 from app.runtime import Runtime
 from app.settings import REPO_ROOT, Settings, get_settings
 from app.ws import router as ws_router
@@ -96,6 +96,7 @@ def create_app(settings: Settings | None = None, runtime: Runtime | None = None)
     app.include_router(perception.router)
     app.include_router(sessions.router)
     app.include_router(speech.router)
+    app.include_router(diagnostics.router)
     app.include_router(ws_router)
     app.mount("/static", StaticFiles(directory=STATIC_DIR), name="static")
 

@@ -38,6 +38,7 @@ class Runtime:
     recorder: SessionRecorder
     mirrors: dict[str, SceneMirror]  # by profile name: "full" and "light"
     replay: SessionReplay | None = None  # the stored sessions' 3D replay (with the mirrors)
+    browser_clients: int = 0  # pages connected to /ws now
 
     @staticmethod
     def start(settings: Settings, worker: RobotPort | None = None) -> Runtime:
@@ -56,6 +57,8 @@ class Runtime:
                     max_auto_replans=settings.max_auto_replans,
                     approve_plans=settings.approve_plans,
                     voice=settings.voice_config(),
+                    diagnostics=settings.diagnostics,
+                    disk_path=settings.data_dir,
                 )
                 if settings.worker_process
                 else RobotWorker(
@@ -67,6 +70,8 @@ class Runtime:
                     max_auto_replans=settings.max_auto_replans,
                     approve_plans=settings.approve_plans,
                     voice=settings.voice_config(),
+                    diagnostics=settings.diagnostics,
+                    disk_path=settings.data_dir,
                 )
             )
         worker.start()

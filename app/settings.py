@@ -10,6 +10,7 @@ from typing import Literal
 from pydantic import AliasChoices, Field
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
+from robot.diagnostics.thresholds import Thresholds
 from robot.planning.pipeline import PlannerConfig
 from robot.speech.robot_voice import VoiceConfig
 
@@ -17,7 +18,9 @@ REPO_ROOT = Path(__file__).resolve().parents[1]
 
 
 class Settings(BaseSettings):
-    model_config = SettingsConfigDict(env_prefix="HUMANOID_", env_file=".env", extra="ignore")
+    model_config = SettingsConfigDict(
+        env_prefix="HUMANOID_", env_file=".env", extra="ignore", env_nested_delimiter="__"
+    )
 
     host: str = Field("127.0.0.1", validation_alias=AliasChoices("HOST", "HUMANOID_HOST"))
     port: int = Field(8000, ge=1, le=65535, validation_alias=AliasChoices("PORT", "HUMANOID_PORT"))
@@ -76,6 +79,15 @@ class Settings(BaseSettings):
     session_retention_count: int = Field(0, ge=0, description="keep at most this many sessions (0: no limit)")
     replay_port: int = Field(8083, ge=1, le=65535, description="port of the session replay's 3D view")
     max_import_bytes: int = Field(512 * 1024 * 1024, gt=0, description="largest session JSON accepted for import")
+
+    # diagnostics: where OK ends (each field of robot.diagnostics.thresholds.Thresholds, e.g.
+    # HUMANOID_DIAGNOSTICS__SERVO_TEMPERATURE_ERROR_C=70)
+    diagnostics: Thresholds = Field(default_factory=Thresholds)
+
+    @property
+    def data_dir(self) -> str:
+        """Where recordings (and, with SQLite, the database) are kept: the disk diagnostics watch."""
+        return str(Path(self.audio_dir).parent)
 
     def voice_config(self) -> VoiceConfig:
         """The robot's microphone and speaker; its recordings wait under the audio directory for the session."""

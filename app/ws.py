@@ -1,6 +1,7 @@
 """WebSocket `/ws`: state and events out, e-stop in (the fastest path from a browser press to the robot).
 
 Messages from the server: {"type": "hello", ...}, {"type": "state", "state": ...}, {"type": "event", "event": ...},
+{"type": "diagnostics", "diagnostics": ...} (once a second, as GET /api/diagnostics),
 {"type": "estop_ack", ...}, {"type": "error", "message": ...}.
 Messages to the server: {"type": "estop", "client_time_s": float | null}, {"type": "estop_release"},
 {"type": "teleop", "vx": float, "vy": float, "yaw_rate": float} (repeat every 100 ms while driving; a refusal
@@ -18,12 +19,14 @@ from typing import Any
 
 from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 
+from app.diagnostics import diagnostics_json, snapshot
 from app.runtime import Runtime
 from app.serialize import event_json, reply_json, state_json
 from robot.interface import EStop, ReleaseEStop, StopTeleop, Teleop
 
 router = APIRouter()
 MAX_MESSAGE_BYTES = 4096
+DIAGNOSTICS_PERIOD_S = 1.0
 
 
 def _client_time(message: dict[str, Any]) -> float | None:
@@ -81,11 +84,15 @@ async def _receive(ws: WebSocket, rt: Runtime, drove: list[bool]) -> None:
 async def _send(ws: WebSocket, rt: Runtime) -> None:
     subscription = rt.worker.subscribe()
     period = 1.0 / rt.settings.ws_state_hz
+    next_diagnostics = 0.0
     try:
         while True:
             while (event := subscription.get(timeout=0)) is not None:
                 await ws.send_json({"type": "event", "event": event_json(event)})
             await ws.send_json({"type": "state", "state": state_json(rt.worker.state())})
+            if time.monotonic() >= next_diagnostics:  # once a second, as they are sampled
+                next_diagnostics = time.monotonic() + DIAGNOSTICS_PERIOD_S
+                await ws.send_json({"type": "diagnostics", "diagnostics": diagnostics_json(snapshot(rt))})
             await asyncio.sleep(period)
     finally:
         subscription.close()
@@ -103,6 +110,7 @@ async def robot_socket(ws: WebSocket) -> None:
         }
     )
     drove = [False]  # whether this socket has driven the robot (then its closing stops it)
+    rt.browser_clients += 1
     tasks = [asyncio.create_task(_receive(ws, rt, drove)), asyncio.create_task(_send(ws, rt))]
     try:
         done, _ = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
@@ -112,6 +120,7 @@ async def robot_socket(ws: WebSocket) -> None:
     except WebSocketDisconnect:
         pass
     finally:
+        rt.browser_clients -= 1
         for task in tasks:
             task.cancel()
         if drove[0]:

@@ -126,6 +126,7 @@ class EStop:
     source: str = "api"
     client_time_s: float | None = None
     relayed_at_s: float | None = None
+    reason: str = ""  # why, when it was not a person (e.g. the diagnostics' safe stop: "r_knee at 78 C")
 
 
 @dataclass(frozen=True)
@@ -207,13 +208,35 @@ class PlaceObstacle:
     y: float
 
 
+class Fault(StrEnum):
+    """Faults the simulation can be made to have, so that diagnostics and the safe stop can be seen working."""
+
+    SERVO_HEAT = "servo_heat"  # a servo's winding `value` degrees hotter (then it cools as a real one would)
+    SERVO_OVERLOAD = "servo_overload"  # a servo's output jammed: its load pinned at `value` % of stall
+    IMU_LOST = "imu_lost"  # the IMU stops answering: its readings freeze
+    CAMERA_STALE = "camera_stale"  # no more camera frames
+    LIDAR_STALE = "lidar_stale"  # no more lidar scans
+    CONTROL_STALL = "control_stall"  # the control loop hangs for `value` seconds, once
+    BATTERY_SOC = "battery_soc"  # the pack's state of charge set to `value` (0..1)
+    CLEAR = "clear"  # every injected fault removed (a hot servo still has to cool down)
+
+
+@dataclass(frozen=True)
+class InjectFault:
+    """Simulation only: give the robot a fault; `target` names the servo (joint) where one is meant."""
+
+    fault: Fault
+    target: str = ""
+    value: float = 0.0
+
+
 @dataclass(frozen=True)
 class ResetRobot:
     """Simulation only: put the robot back standing at its start pose (after a fall, or to start over)."""
 
 
 PlanCommand = RunCommand | ExecutePlan | Replan | CancelPlan | ApprovePlan | PausePlan | ResumePlan | SetApproval
-MotionCommand = Teleop | StopTeleop | SetPosture | ResetRobot | PlaceObstacle
+MotionCommand = Teleop | StopTeleop | SetPosture | ResetRobot | PlaceObstacle | InjectFault
 Command = PlanCommand | MotionCommand | EStop | ReleaseEStop
 
 
@@ -449,6 +472,42 @@ class RobotState:
 
 
 @dataclass(frozen=True)
+class DiagnosticStatus:
+    """One component's health, as ROS diagnostic_msgs/DiagnosticStatus. `name` is "group/component" (e.g.
+    "servos/r_knee"); `values` are its key-values, numbers where they are measurements (units in the key)."""
+
+    name: str
+    level: Level
+    message: str
+    hardware_id: str = ""
+    values: tuple[tuple[str, float | str], ...] = ()
+    stops_motion: bool = False  # at ERROR, the robot may not move: the diagnostics stop it
+
+    @property
+    def group(self) -> str:
+        return self.name.split("/", 1)[0]
+
+
+@dataclass(frozen=True)
+class DiagnosticArray:
+    """Every component's status at one instant (as ROS diagnostic_msgs/DiagnosticArray), sampled at ~1 Hz."""
+
+    wall_time_s: float
+    sim_time_s: float
+    statuses: tuple[DiagnosticStatus, ...]
+    monitor_cpu_ms: float = 0.0  # CPU time the last sample cost the monitor
+
+    @property
+    def level(self) -> Level:
+        """The worst level (STALE counts as worse than WARN, below ERROR: the data is missing, not bad)."""
+        rank = {Level.OK: 0, Level.WARN: 1, Level.STALE: 2, Level.ERROR: 3}
+        return max((s.level for s in self.statuses), key=rank.__getitem__, default=Level.OK)
+
+    def find(self, name: str) -> DiagnosticStatus | None:
+        return next((s for s in self.statuses if s.name == name), None)
+
+
+@dataclass(frozen=True)
 class Event:
     """Something that happened, in order (`seq`), with a topic-like kind such as "estop/latched"."""
 
@@ -513,4 +572,8 @@ class RobotPort(Protocol):
 
     def telemetry_since(self, seq: int) -> TelemetryBatch | None:
         """Telemetry rows numbered `seq` and later (see robot.telemetry), for recording."""
+        ...
+
+    def diagnostics(self) -> DiagnosticArray | None:
+        """The robot's latest diagnostics (None before the first sample)."""
         ...

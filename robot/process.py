@@ -24,14 +24,17 @@ from multiprocessing.connection import Connection
 from typing import Any
 
 from robot.control.priority import WORKER_FIFO_PRIORITY, raise_thread_priority
+from robot.diagnostics.thresholds import Thresholds
 from robot.events import EventBus, Subscription
 from robot.interface import (
     ApprovePlan,
     CancelPlan,
     Command,
     CommandReply,
+    DiagnosticArray,
     EStop,
     Event,
+    InjectFault,
     PausePlan,
     PlaceObstacle,
     Refusal,
@@ -59,7 +62,7 @@ REPLY_TIMEOUT_S = 90.0
 STARTUP_TIMEOUT_S = 180.0
 # Commands that must never queue behind a slow one: handled inline by the child's receiving thread.
 _IMMEDIATE = (EStop, ReleaseEStop, CancelPlan, Teleop, StopTeleop, SetPosture, ResetRobot, PlaceObstacle, PausePlan,
-              ApprovePlan, ResumePlan, SetApproval)  # fmt: skip
+              ApprovePlan, ResumePlan, SetApproval, InjectFault)  # fmt: skip
 
 
 class WorkerProcess:
@@ -75,8 +78,12 @@ class WorkerProcess:
         max_auto_replans: int = 2,
         approve_plans: bool = False,
         voice: VoiceConfig | None = None,
+        diagnostics: Thresholds | None = None,
+        disk_path: str = ".",
     ) -> None:
         self._seed = seed
+        self._thresholds = diagnostics
+        self._disk_path = disk_path
         self._voice = voice
         self._approve_plans = approve_plans
         self._planning = planning or PlannerConfig()
@@ -92,6 +99,7 @@ class WorkerProcess:
         self._board = StateBoard()
         self._feed = SensorFeed()
         self._telemetry = TelemetryRing()
+        self._diagnostics: DiagnosticArray | None = None
         self._description: RobotDescription | None = None
         self._process: mp.process.BaseProcess | None = None
         self._conn: Connection | None = None
@@ -115,6 +123,8 @@ class WorkerProcess:
                 self._max_auto_replans,
                 self._approve_plans,
                 self._voice,
+                self._thresholds,
+                self._disk_path,
             ),
             name="robot-worker",
             daemon=True,
@@ -197,6 +207,9 @@ class WorkerProcess:
     def telemetry_since(self, seq: int) -> TelemetryBatch | None:
         return self._telemetry.since(seq)
 
+    def diagnostics(self) -> DiagnosticArray | None:
+        return self._diagnostics
+
     def wait_for(self, predicate: Callable[[RobotState], bool], timeout_s: float) -> bool:
         return self._board.wait_for(predicate, timeout_s)
 
@@ -216,6 +229,8 @@ class WorkerProcess:
                 self._bus.forward(message[1])
             elif kind == "telemetry":
                 self._telemetry.extend(message[1])
+            elif kind == "diagnostics":
+                self._diagnostics = message[1]
             elif kind == "feed":
                 changed: SensorFeed = message[1]
                 self._feed = SensorFeed(
@@ -249,6 +264,8 @@ def child_main(
     max_auto_replans: int = 2,
     approve_plans: bool = False,
     voice: VoiceConfig | None = None,
+    diagnostics: Thresholds | None = None,
+    disk_path: str = ".",
 ) -> None:
     """Entry point of the worker process: build the robot, then serve commands until told to stop."""
     try:
@@ -257,7 +274,8 @@ def child_main(
 
         worker = RobotWorker(generate_world(seed), realtime=realtime, control_hz=control_hz, perception=perception,
                              planning=planning, max_auto_replans=max_auto_replans,
-                             approve_plans=approve_plans, voice=voice)  # fmt: skip
+                             approve_plans=approve_plans, voice=voice, diagnostics=diagnostics,
+                             disk_path=disk_path)  # fmt: skip
         subscription = worker.subscribe()
         if realtime:  # every thread started from here on inherits it; the control loop goes higher still
             raise_thread_priority(WORKER_FIFO_PRIORITY)
@@ -310,6 +328,7 @@ def child_main(
 def _forward_state_and_events(worker: Any, subscription: Subscription, send: Any, stop: threading.Event) -> None:
     last_state = None
     last_feed = SensorFeed()
+    last_diagnostics = None
     telemetry_seq = 0
     while not stop.is_set():
         event = subscription.get(timeout=STATE_PERIOD_S)
@@ -321,6 +340,10 @@ def _forward_state_and_events(worker: Any, subscription: Subscription, send: Any
             if telemetry is not None:
                 send(("telemetry", telemetry))
                 telemetry_seq = telemetry.next_seq
+            diagnostics = worker.diagnostics()
+            if diagnostics is not last_diagnostics:
+                send(("diagnostics", diagnostics))
+                last_diagnostics = diagnostics
             state = worker.state()
             if state is not last_state:
                 send(("state", state))

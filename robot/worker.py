@@ -34,16 +34,21 @@ from robot.control.priority import raise_thread_priority
 from robot.control.stack import build_locomotion, measured_pose, sensors
 from robot.control.stats import LoopStats
 from robot.control.whole_body import UPPER_BODY_JOINTS
+from robot.diagnostics.robot_sources import RobotDiagnostics, RobotReadings
+from robot.diagnostics.thresholds import Thresholds
 from robot.events import EventBus, Subscription
 from robot.interface import (
     ApprovePlan,
     CancelPlan,
     Command,
     CommandReply,
+    DiagnosticArray,
     EStop,
     Event,
     ExecutePlan,
+    Fault,
     Footprint,
+    InjectFault,
     Level,
     LocomotionState,
     Mode,
@@ -97,7 +102,7 @@ from robot.navigation.navigator import (
 from robot.perception.geometry import matrix_to_quat_wxyz, yaw_of
 from robot.perception.search import ObjectNotFound, find_object
 from robot.perception.sensor_process import SensorError
-from robot.perception.service import PerceptionService
+from robot.perception.service import SENSOR_HZ, PerceptionService
 from robot.planning.context import ConversationMemory, PlanningContext
 from robot.planning.executor import (
     Cancelled,
@@ -113,6 +118,7 @@ from robot.planning.validator import validate_plan_json
 from robot.planning.world_context import WorldContext
 from robot.power.battery import Battery, ServoElectrical
 from robot.sim.backend import Measurements, MujocoSimBackend
+from robot.sim.servo_model import SimulatedServos
 from robot.simple_actions import SimpleActions
 from robot.speech.robot_voice import RobotVoice, VoiceConfig
 from robot.state_board import StateBoard
@@ -124,6 +130,7 @@ MAX_COMMAND_CHARS = 500
 MAX_TICKS_BEHIND = 5
 # Deadman: teleop motion stops when no teleop command has arrived for this long (s).
 TELEOP_TIMEOUT_S = 0.3
+CONVERTER_DROPOUT_V = 1.0  # the 12 V converter needs this much headroom over its output
 
 
 def _step_summary(steps: tuple[StepStatus, ...]) -> list[dict[str, str]]:
@@ -171,9 +178,13 @@ class RobotWorker:
         locomotion: LocomotionController | None = None,
         perception: bool = True,
         voice: VoiceConfig | None = None,
+        diagnostics: Thresholds | None = None,
+        disk_path: str = ".",
     ) -> None:
+        """`diagnostics`: the thresholds the robot's health is judged by; `disk_path`: where its data is kept."""
         self.layout = layout
         self.backend = backend or MujocoSimBackend(layout)
+        self._planner_config = planning if isinstance(planning, PlannerConfig) else None
         if isinstance(planning, PlannerConfig) or planning is None:
             planning = build_pipeline(planning or PlannerConfig())
         if planner is not None:  # a given planner plans alone (tests)
@@ -246,6 +257,18 @@ class RobotWorker:
         self._voice: RobotVoice | None = None  # the robot's microphone and speaker, opened on start
         self._servos = ServoElectrical()
         self._battery = Battery()
+        self._servo_model = SimulatedServos(self.backend.joint_names, np.array(humanoid_v1.servo_torque_per_unit()))
+        self._stall_s = 0.0  # injected fault: the next tick hangs this long
+        self._diagnostics = RobotDiagnostics(
+            RobotReadings(
+                joint_names=self.backend.joint_names, stats=self._stats, servos=self._servo_model.readings,
+                power=lambda: self._board.latest().power, battery_cells=self._battery.spec.cells,
+                perception=self._perception_state, sensor_feed=self.sensor_feed, sim_time=lambda: self._sim_time,
+                imu_stamp=lambda: self._measured.imu_stamp_s, voice=lambda: self._voice, sensor_hz=SENSOR_HZ,
+            ),
+            diagnostics or Thresholds(), realtime, disk_path, self._planner_config, self.planning.describe(),
+            self._bus.publish, self._safe_stop,
+        )  # fmt: skip
         layout_of = TelemetryLayout.for_robot(tuple(self.backend.joint_names), self.backend.qpos().size,
                                               self.backend.mocap_positions().shape[0])  # fmt: skip
         self._telemetry = TelemetrySampler(layout_of, control_hz)
@@ -270,6 +293,7 @@ class RobotWorker:
             thread.start()
         if self._perception is not None:
             self._perception.start()
+        self._diagnostics.start()
         if self._voice_config is not None:
             world = self._world_context()
             self._voice = RobotVoice(self._voice_config, world.objects, world.places, self._bus.publish,
@@ -290,6 +314,7 @@ class RobotWorker:
         for thread in self._threads:
             thread.join(timeout=5.0)
         self._threads = []
+        self._diagnostics.stop()
         if self._voice is not None:
             self._voice.stop()
             self._voice = None
@@ -333,6 +358,8 @@ class RobotWorker:
             return self._reset_robot()
         if isinstance(command, PlaceObstacle):
             return self._place_obstacle(command)
+        if isinstance(command, InjectFault):
+            return self._inject_fault(command)
         return CommandReply(False, f"unknown command type {type(command).__name__}", Refusal.INVALID)
 
     def state(self) -> RobotState:
@@ -349,6 +376,13 @@ class RobotWorker:
 
     def telemetry_since(self, seq: int) -> TelemetryBatch | None:
         return self._telemetry.ring.since(seq)
+
+    def diagnostics(self) -> DiagnosticArray | None:
+        return self._diagnostics.latest()
+
+    def sample_diagnostics(self) -> DiagnosticArray:
+        """Sample every diagnostic now (headless runs and tests; a running worker samples once a second)."""
+        return self._diagnostics.monitor.sample()
 
     def describe(self) -> RobotDescription:
         if self._description is None:
@@ -757,7 +791,10 @@ class RobotWorker:
         if command.client_time_s is not None:
             data["latency_ms"] = (applied - command.client_time_s) * 1e3
         action = "stopping the walk, then holding" if walking else "holding position"
-        self._bus.publish("estop/latched", f"E-STOP latched ({command.source}): {action}", Level.ERROR, **data)
+        why = f" because {command.reason}" if command.reason else ""
+        if command.reason:
+            data["reason"] = command.reason
+        self._bus.publish("estop/latched", f"E-STOP latched ({command.source}){why}: {action}", Level.ERROR, **data)
         self._publish_state(self.backend.read())
 
     def _release_estop(self, command: ReleaseEStop) -> CommandReply:
@@ -766,6 +803,10 @@ class RobotWorker:
                 return CommandReply(False, "e-stop is not latched", Refusal.NOT_LATCHED)
             if self._estop_pending is not None:
                 return CommandReply(False, "e-stop is still being applied; try again", Refusal.ESTOP_LATCHED)
+            unsafe = self._diagnostics.unsafe()
+            if unsafe:
+                faults = "; ".join(f"{s.name}: {s.message}" for s in unsafe)
+                return CommandReply(False, f"motion is unsafe until this is fixed: {faults}", Refusal.ESTOP_LATCHED)
             self._estop_latched = False
         self._bus.publish(
             "estop/released", f"E-STOP released ({command.source}); the robot stays still until the next command"
@@ -1118,6 +1159,55 @@ class RobotWorker:
             self._obstacles_pending.append((command.x, command.y))
         return CommandReply(True, f"placing an obstacle at ({command.x:.2f}, {command.y:.2f})")
 
+    def _inject_fault(self, command: InjectFault) -> CommandReply:
+        """Simulation only: faults for diagnostics to find (and tests to check that they do)."""
+        if not isinstance(self.backend, MujocoSimBackend):
+            return CommandReply(False, "faults can only be injected in simulation", Refusal.UNSUPPORTED)
+        fault, target, value = command.fault, command.target, command.value
+        if not math.isfinite(value):
+            return CommandReply(False, "the fault's value must be finite", Refusal.INVALID)
+        try:
+            if fault == Fault.SERVO_HEAT:
+                self._servo_model.heat(target, value)
+            elif fault == Fault.SERVO_OVERLOAD:
+                self._servo_model.jam(target, value or 100.0)
+            elif fault == Fault.IMU_LOST:
+                self.backend.lose_imu(True)
+            elif fault in (Fault.CAMERA_STALE, Fault.LIDAR_STALE):
+                if self._perception is None:
+                    return CommandReply(False, "perception is off: no camera or lidar", Refusal.INVALID)
+                self._perception.silence("camera" if fault == Fault.CAMERA_STALE else "lidar")
+            elif fault == Fault.CONTROL_STALL:
+                if not 0 < value <= 5:
+                    return CommandReply(False, "a control stall lasts 0-5 s", Refusal.INVALID)
+                self._stall_s = value
+            elif fault == Fault.BATTERY_SOC:
+                if not 0 <= value <= 1:
+                    return CommandReply(False, "a state of charge is 0..1", Refusal.INVALID)
+                self._battery.soc = value
+            elif fault == Fault.CLEAR:
+                self._servo_model.clear_faults()
+                self.backend.lose_imu(False)
+                if self._perception is not None:
+                    self._perception.silence("camera", False)
+                    self._perception.silence("lidar", False)
+            else:
+                return CommandReply(False, f"unknown fault {fault!r}", Refusal.INVALID)
+        except ValueError as exc:
+            return CommandReply(False, str(exc), Refusal.INVALID)
+        what = f"{fault.value}" + (f" on {target}" if target else "") + (f" ({value:g})" if value else "")
+        self._bus.publish("sim/fault", f"fault injected: {what}", Level.WARN if fault != Fault.CLEAR else Level.OK,
+                          fault=fault.value, target=target, value=value)  # fmt: skip
+        return CommandReply(True, f"fault injected: {what}")
+
+    def _safe_stop(self, reason: str) -> None:
+        """Diagnostics found a fault that makes motion unsafe: the controlled stop, latched."""
+        with self._lock:
+            if self._fallen:  # already down and refusing to move
+                return
+        self._bus.publish("diagnostics/safe_stop", f"safe stop: {reason}", Level.ERROR, reason=reason)
+        self.submit(EStop(source="diagnostics", reason=reason))
+
     def _apply_pending_obstacles(self) -> None:
         with self._lock:
             pending, self._obstacles_pending = self._obstacles_pending, []
@@ -1149,6 +1239,7 @@ class RobotWorker:
             self._perception.forget_objects()
             self._perception.clear_map()
         self.backend.reset(self._stand)
+        self._servo_model.reboot()  # a reset power-cycles the servos: latched errors clear, heat stays
         self._posture.hold(self._stand)
         self._measured = self.backend.read()
         self._loco.reset_odometry(measured_pose(self._measured), sensors(self._measured))
@@ -1248,6 +1339,7 @@ class RobotWorker:
             self._bus.publish("control/priority", f"control loop at {self.control_hz:.0f} Hz with {priority}",
                               Level.OK if priority.startswith("real-time") else Level.WARN)  # fmt: skip
         next_deadline = time.perf_counter() + self.dt
+        self._stats.last_tick_end = time.perf_counter()  # the watchdog counts from the loop's start
         while not self._stop.is_set():
             if self.realtime:
                 remaining = next_deadline - time.perf_counter()
@@ -1275,6 +1367,9 @@ class RobotWorker:
 
     def _tick(self) -> None:
         """One control period: targets out, physics (or the servos) forward, measurements in, state published."""
+        if self._stall_s > 0:  # injected fault: a controller that hangs
+            stall, self._stall_s = self._stall_s, 0.0
+            time.sleep(stall)
         self._apply_pending_estop()
         self._apply_pending_reset()
         self._apply_pending_obstacles()
@@ -1300,6 +1395,8 @@ class RobotWorker:
         m = self._measured
         if m.joint_torques is not None:
             self._battery.step(self._servos.power_w(m.joint_torques, m.joint_velocities), self.dt)
+            bus_v = min(self._servos.supply_v, self._battery.reading.voltage_v - CONVERTER_DROPOUT_V)
+            self._servo_model.step(m.joint_torques, self._targets, m.joint_positions, bus_v, self.dt)
         if not self._telemetry.due():
             return
         battery = self._battery.reading

@@ -12,6 +12,7 @@ from fastapi.testclient import TestClient
 from app.main import create_app
 from app.runtime import Runtime
 from app.settings import Settings
+from robot.diagnostics.thresholds import Thresholds
 from robot.model.scene import build_scene
 from robot.model.world import WorldLayout, generate_world
 from robot.sim.backend import MujocoSimBackend
@@ -35,6 +36,9 @@ def make_worker(layout: WorldLayout, scene_model: mujoco.MjModel) -> Iterator:
     workers: list[RobotWorker] = []
 
     def make(realtime: bool = True, perception: bool = False, **kwargs) -> RobotWorker:
+        # A loaded test machine can pause an in-process worker's loop longer than the robot's watchdog allows (and
+        # a safe stop would then refuse the test's commands): tests of the watchdog pass their own thresholds.
+        kwargs.setdefault("diagnostics", Thresholds(control_stale_s=3.0))
         worker = RobotWorker(layout, backend=MujocoSimBackend(layout, scene_model), realtime=realtime,
                              perception=perception, **kwargs)  # fmt: skip
         worker.start()

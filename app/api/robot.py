@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from typing import Annotated, Any
 
@@ -127,6 +128,7 @@ def config(rt: RuntimeDep) -> dict[str, Any]:
         "speaker": description.speaker,
         "approval_required": rt.worker.state().approval_required,
         "session_id": rt.recorder.session_id,
+        "diagnostics_thresholds": dataclasses.asdict(rt.settings.diagnostics),
     }
 
 

@@ -226,7 +226,8 @@ def build_timeline(commands: list[dict], transcripts: list[dict], plans: list[di
             items.append({"type": "fall", "at": e["wall_time"], "sim_time_s": e["sim_time_s"], "level": ERROR,
                           "text": e["message"]})  # fmt: skip
         elif e["level"] >= WARN and not kind.startswith("plan/"):
-            items.append({"type": "error" if e["level"] >= ERROR else "alarm", "at": e["wall_time"],
+            alarm = kind.startswith("diagnostics/") or e["level"] < ERROR
+            items.append({"type": "alarm" if alarm else "error", "at": e["wall_time"],
                           "sim_time_s": e["sim_time_s"], "level": e["level"],
                           "text": f"[{kind}] {e['message']}"})  # fmt: skip
     order = {"heard": 0, "command": 1, "plan": 2, "step": 3}

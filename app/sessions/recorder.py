@@ -92,6 +92,9 @@ class WriteStats:
     telemetry_samples: int = 0
     telemetry_bytes: int = 0
     commit_ms: deque[float] = field(default_factory=lambda: deque(maxlen=10_000))
+    last_commit_wall_s: float | None = None
+    failing_since_wall_s: float | None = None  # writes fail (a locked DB, a full disk) and are being retried
+    last_error: str = ""
 
 
 class SessionRecorder:
@@ -308,10 +311,16 @@ class SessionRecorder:
             log.warning("cannot keep the recording %s: %s", spooled, exc)
             return None
 
+    def backlog(self) -> int:
+        """Rows waiting to be written."""
+        return self._pending.qsize()
+
     def _count(self, items: list[Any], seconds: float) -> None:
         stats = self.stats
         stats.commits += 1
         stats.commit_ms.append(seconds * 1e3)
+        stats.last_commit_wall_s = time.time()
+        stats.failing_since_wall_s = None
         for item in items:
             stats.rows += 1
             if isinstance(item, TelemetryChunkRow):
@@ -348,8 +357,11 @@ class SessionRecorder:
                             db.add(item)
                     db.commit()
                 self._count(items, time.perf_counter() - started)
-            except Exception:  # keep the items, in order, ahead of anything newer: the next flush retries them
+            except Exception as exc:  # keep the items, in order, ahead of anything newer: the next flush retries them
                 log.exception("session write failed; will retry")
+                self.stats.last_error = f"{type(exc).__name__}: {exc}"[:300]
+                if self.stats.failing_since_wall_s is None:
+                    self.stats.failing_since_wall_s = time.time()
                 rest = []
                 while True:
                     try:

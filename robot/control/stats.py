@@ -24,12 +24,14 @@ class LoopStats:
         self._rtf_wall0 = time.perf_counter()
         self._rtf_sim0 = 0.0
         self._snapshot = ControlStats(control_hz=control_hz)
+        self.last_tick_end = time.perf_counter()  # a watchdog compares it with the clock
 
     def record_tick(self, duration_s: float, missed_deadline: bool) -> None:
         self._ticks.append(duration_s)
         self.tick_count += 1
         if missed_deadline:
             self.deadline_misses += 1
+        self.last_tick_end = time.perf_counter()
 
     def update_rtf(self, sim_time_s: float) -> None:
         """Real-time factor over the last second or so of wall time."""

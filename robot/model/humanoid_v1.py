@@ -56,6 +56,8 @@ FINGER_MASS = 0.012
 FINGER_TRAVEL = 0.028  # each finger, from closed (0) to open; the gripper opens 56 mm
 GRIP_KP_N_PER_M = 1000.0
 GRIP_FORCE_N = 10.0
+# The gripper's servo turns a lead screw: each newton on the fingers is this much torque at its shaft.
+GRIP_SERVO_NM_PER_N = 0.2
 FINGER_FRICTION = (1.2, 0.01, 0.0001)
 WRIST_MASS = 0.08
 # Where the wrist sits on the forearm link (the packaged forearm spans y 0..0.146, centred at x -0.019).
@@ -290,3 +292,9 @@ def placo_mjcf() -> str:
     spec.body(HEAD_CAMERA_BODY).add_body(name="camera", pos=list(CAMERA_POS), mass=FRAME_MASS,
                                          inertia=[FRAME_INERTIA] * 3)  # fmt: skip
     return spec.to_xml()
+
+
+def servo_torque_per_unit() -> list[float]:
+    """Per actuator (JOINT_NAMES order), its force in the torque of the servo behind it: 1 for the revolute joints,
+    the lead screw's ratio for the grippers (whose actuators are finger forces in N)."""
+    return [GRIP_SERVO_NM_PER_N if name in GRIPPER_JOINTS else 1.0 for name in JOINT_NAMES]

@@ -81,6 +81,7 @@ class PerceptionService:
         self._lidar_rate = _Rate()
         self._clear_map = False
         self._next_time = 0.0  # sim time of the next sensing instant
+        self._silenced: set[str] = set()  # injected faults: sensors whose data no longer arrives ("camera", "lidar")
 
     def start(self) -> None:
         if self._thread is None:
@@ -132,6 +133,12 @@ class PerceptionService:
                 return
         # sensing hangs: say so and let the robot go on without it, rather than stall the simulation for good
         self._fail(f"the sensors did not answer for {timeout_s:.0f} s: perception stopped")
+
+    def silence(self, sensor: str, silent: bool = True) -> None:
+        """Simulate a sensor whose data stops arriving (a cable out, a driver hung): "camera" or "lidar"."""
+        if sensor not in ("camera", "lidar"):
+            raise ValueError(f"no sensor {sensor!r}: camera or lidar")
+        (self._silenced.add if silent else self._silenced.discard)(sensor)
 
     def clear_map(self) -> None:
         """Forget the map (the robot was moved by hand, or the world changed); the next scan starts a new one."""
@@ -186,6 +193,10 @@ class PerceptionService:
             runner.close()
 
     def _absorb(self, out: SensorOutput) -> None:
+        if self._silenced:
+            out = replace(out, camera=None if "camera" in self._silenced else out.camera,
+                          scan=None if "lidar" in self._silenced else out.scan,
+                          grid=None if "lidar" in self._silenced else out.grid)  # fmt: skip
         feed = self._feed
         updates: dict[str, object] = {}
         if out.camera is not None:

@@ -44,6 +44,7 @@ class Measurements:
     foot_forces: np.ndarray  # (2, 4) N on each sole's four force pads, left then right
     joint_torques: np.ndarray | None = None  # (n_joints,) Nm the servos exert (what their current says)
     com: np.ndarray | None = None  # (3,) the robot's centre of mass in the world frame
+    imu_stamp_s: float | None = None  # when the IMU sample was taken (None: this tick)
 
     @property
     def tilt_deg(self) -> float:
@@ -83,6 +84,7 @@ class MujocoSimBackend:
         self._spares = [int(self.model.body_mocapid[self.model.body(spare_obstacle_name(i)).id])
                         for i in range(SPARE_OBSTACLES)]  # fmt: skip
         self._spares_placed = 0
+        self._imu_frozen: tuple[float, np.ndarray, np.ndarray, np.ndarray] | None = None
         self.reset()
 
     def place_obstacle(self, x: float, y: float) -> int:
@@ -117,6 +119,8 @@ class MujocoSimBackend:
         """Robot standing at its start pose in `posture` (default: the model's), soles on the floor; objects where
         the layout puts them."""
         mujoco.mj_resetData(self.model, self.data)
+        if getattr(self, "_imu_frozen", None) is not None:  # a lost IMU stays lost; its last sample is from now on
+            self._imu_frozen = (0.0, *self._imu_frozen[1:])
         for i, mocap in enumerate(getattr(self, "_spares", [])):
             self.data.mocap_pos[mocap] = (SPARE_PARKING[0] + i, SPARE_PARKING[1], SPARE_OBSTACLE_HALF[2])
         self._spares_placed = 0
@@ -135,17 +139,29 @@ class MujocoSimBackend:
         posture = humanoid_v1.stand_posture()
         return np.array([posture[n] for n in humanoid_v1.JOINT_NAMES])
 
+    def lose_imu(self, lost: bool) -> None:
+        """Simulate an IMU that stops answering: its last sample is read again and again, with its old stamp."""
+        d = self.data
+        self._imu_frozen = (float(d.time), d.sensordata[self._imu_quat].copy(), d.sensordata[self._gyro].copy(),
+                            d.sensordata[self._accel].copy()) if lost else None  # fmt: skip
+
     def read(self) -> Measurements:
         d = self.data
+        if self._imu_frozen is None:
+            imu_stamp, imu_quat = float(d.time), d.sensordata[self._imu_quat].copy()
+            gyro, accel = d.sensordata[self._gyro].copy(), d.sensordata[self._accel].copy()
+        else:
+            imu_stamp, imu_quat, gyro, accel = (v.copy() if isinstance(v, np.ndarray) else v for v in self._imu_frozen)
         return Measurements(
             sim_time_s=float(d.time),
             joint_positions=d.qpos[self._joint_qpos].copy(),
             joint_velocities=d.qvel[self._joint_dof].copy(),
             base_position=d.qpos[0:3].copy(),
             base_quat=d.qpos[3:7].copy(),
-            imu_quat=d.sensordata[self._imu_quat].copy(),
-            imu_gyro=d.sensordata[self._gyro].copy(),
-            imu_accel=d.sensordata[self._accel].copy(),
+            imu_quat=imu_quat,
+            imu_gyro=gyro,
+            imu_accel=accel,
+            imu_stamp_s=imu_stamp,
             foot_forces=np.array([d.sensordata[s][0] for s in self._fsr]).reshape(2, 4),
             joint_torques=d.actuator_force[self._actuator].copy(),
             com=d.subtree_com[self._robot_root].copy(),

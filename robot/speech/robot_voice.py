@@ -78,6 +78,11 @@ class RobotVoice:
         self._say_thread: threading.Thread | None = None
         self._stopping = threading.Event()
 
+    @property
+    def listening(self) -> bool:
+        """The microphone is open and a recogniser hears it."""
+        return self.microphone is not None and self._recognizer is not None
+
     # lifecycle
 
     def start(self, microphone: AudioDevice | None = None, speaker: AudioDevice | None = None) -> None:

@@ -54,6 +54,7 @@ function connect() {
     }
     else if (m.type === "estop_release_ack" && !m.accepted) showResult(m.message, true);
     else if (m.type === "teleop_ack" && humanoid.onTeleopAck) humanoid.onTeleopAck(m);
+    else if (m.type === "diagnostics" && humanoid.onDiagnostics) humanoid.onDiagnostics(m.diagnostics);
   };
 }
 

@@ -1,0 +1,157 @@
+"""The robot's diagnostics, wired: which readings feed which check, and the monitor that samples them.
+
+`RobotDiagnostics` is what the worker holds; it knows the worker only through the callables it is given."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from robot.control.stats import LoopStats
+from robot.diagnostics.checks import control_status, power_status, sensor_statuses, servo_statuses
+from robot.diagnostics.compute import ComputeProbe
+from robot.diagnostics.links import PlannerLink
+from robot.diagnostics.monitor import DiagnosticsMonitor
+from robot.diagnostics.thresholds import Thresholds
+from robot.hardware.xm430 import ServoReadings
+from robot.interface import DiagnosticArray, DiagnosticStatus, Level, PerceptionState, PowerState, SensorFeed
+from robot.planning.pipeline import PlannerConfig
+
+
+@dataclass
+class RobotReadings:
+    """Where each reading comes from (callables into the worker, read from the monitor's thread)."""
+
+    joint_names: Sequence[str]
+    stats: LoopStats
+    servos: Callable[[], ServoReadings]
+    power: Callable[[], PowerState | None]
+    battery_cells: int
+    perception: Callable[[], PerceptionState | None]
+    sensor_feed: Callable[[], SensorFeed]
+    sim_time: Callable[[], float]
+    imu_stamp: Callable[[], float | None]
+    voice: Callable[[], Any]  # the RobotVoice, or None when voice is not set up
+    sensor_hz: float
+
+
+class RobotDiagnostics:
+    def __init__(
+        self,
+        readings: RobotReadings,
+        limits: Thresholds,
+        realtime: bool,
+        disk_path: str,
+        planner: PlannerConfig | None,
+        planner_name: str,
+        publish: Callable[..., object],
+        safe_stop: Callable[[str], None],
+        period_s: float = 1.0,
+    ) -> None:
+        self.readings = readings
+        self.limits = limits
+        self.realtime = realtime
+        self.compute = ComputeProbe(disk_path, limits)
+        self.planner_link = PlannerLink(planner, limits.link_check_period_s, limits.link_timeout_s) if planner else None
+        self.planner_name = planner_name
+        self._misses = (time.monotonic(), readings.stats.deadline_misses)
+        self.monitor = DiagnosticsMonitor(
+            [self.compute.statuses, self._control, self._servos, self._power, self._sensors, self._links],
+            publish,
+            safe_stop,
+            readings.sim_time,
+            period_s,
+            watchdog=self._watchdog if realtime else None,
+        )
+
+    def start(self) -> None:
+        if self.planner_link is not None:
+            self.planner_link.start()
+        self.monitor.start()
+
+    def stop(self) -> None:
+        self.monitor.stop()
+        if self.planner_link is not None:
+            self.planner_link.stop()
+
+    def latest(self) -> DiagnosticArray | None:
+        return self.monitor.latest()
+
+    def unsafe(self) -> list[DiagnosticStatus]:
+        return self.monitor.unsafe()
+
+    # sources ---------------------------------------------------------------------------------------------------
+
+    def _tick_age(self) -> float:
+        return time.perf_counter() - self.readings.stats.last_tick_end
+
+    def _watchdog(self) -> DiagnosticStatus | None:
+        age = self._tick_age()
+        if age <= self.limits.control_stale_s:
+            return None
+        return control_status(self.readings.stats.snapshot(), age, 0.0, True, self.limits)
+
+    def _control(self) -> list[DiagnosticStatus]:
+        stats = self.readings.stats
+        now, misses = time.monotonic(), stats.deadline_misses
+        then, before = self._misses
+        self._misses = (now, misses)
+        rate = (misses - before) / (now - then) if now > then else 0.0
+        return [control_status(stats.snapshot(), self._tick_age(), rate, self.realtime, self.limits)]
+
+    def _servos(self) -> list[DiagnosticStatus]:
+        return servo_statuses(self.readings.joint_names, self.readings.servos(), self.limits)
+
+    def _power(self) -> list[DiagnosticStatus]:
+        return [power_status(self.readings.power(), self.readings.battery_cells, self.limits)]
+
+    def _sensors(self) -> list[DiagnosticStatus]:
+        r = self.readings
+        sim_time = r.sim_time()
+        stamp = r.imu_stamp()
+        feed = r.sensor_feed()
+        return sensor_statuses(
+            r.perception(),
+            sim_time,
+            feed.camera.sim_time_s if feed.camera else None,
+            feed.scan.sim_time_s if feed.scan else None,
+            max(0.0, sim_time - stamp) if stamp is not None else 0.0,
+            r.sensor_hz,
+            self.limits,
+        )
+
+    def _links(self) -> list[DiagnosticStatus]:
+        out = [
+            self.planner_link.status()
+            if self.planner_link is not None
+            else DiagnosticStatus("links/planner", Level.OK, self.planner_name)
+        ]
+        voice = self.readings.voice()
+        if voice is not None:
+            if voice.listening:
+                out.append(
+                    DiagnosticStatus(
+                        "links/robot_asr", Level.OK, f"{voice.microphone_status}: listening", voice.config.engine
+                    )
+                )
+            elif voice.microphone is not None:
+                out.append(
+                    DiagnosticStatus(
+                        "links/robot_asr",
+                        Level.ERROR,
+                        "the recogniser is not running; the robot's microphone is unheard",
+                        voice.config.engine,
+                    )
+                )
+            else:
+                out.append(
+                    DiagnosticStatus(
+                        "links/robot_asr",
+                        Level.OK,
+                        f"{voice.microphone_status}; voice commands work through the page",
+                        voice.config.engine,
+                    )
+                )
+        return out
