@@ -232,7 +232,8 @@ def build_parser() -> argparse.ArgumentParser:
     db_sub.add_parser("upgrade", help="apply pending migrations").set_defaults(func=_db)
 
     bench = sub.add_parser("bench", help="benchmarks, written as JSON")
-    bench.add_argument("suite", choices=["core", "walk", "perception", "capstone", "planner", "voice", "sessions"])
+    suites = ["core", "walk", "perception", "capstone", "planner", "voice", "sessions", "diagnostics"]
+    bench.add_argument("suite", choices=suites)
     bench.add_argument("--json", action="store_true", help="print the JSON result")
     bench.add_argument("--output", default=None, help="also write the JSON result to this file")
     bench.add_argument("--presses", type=int, default=100, help="e-stop presses to time")
@@ -241,7 +242,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--duration",
         type=float,
         default=30.0,
-        help="core: seconds of control-loop timing (>= 30 s: the tick window); sessions: seconds per phase",
+        help="core: seconds of control-loop timing (>= 30 s: the tick window); sessions: seconds per phase; "
+        "diagnostics: seconds of monitoring measured",
     )
     bench.add_argument("--session-minutes", type=float, default=10.0, help="sessions: length of the long session")
     bench.add_argument("--scripts", type=int, default=20, help="walk: random velocity scripts to run")

@@ -47,6 +47,10 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
         from app.bench.sessions import run_sessions
 
         result = run_sessions(phase_s=args.duration, session_minutes=args.session_minutes)
+    elif suite == "diagnostics":
+        from app.bench.diagnostics import run_diagnostics
+
+        result = run_diagnostics(duration_s=args.duration)
     elif suite == "voice":
         from app.bench.voice import run_voice
 

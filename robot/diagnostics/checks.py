@@ -11,6 +11,9 @@ from robot.hardware.xm430 import HardwareError, ServoReadings
 from robot.interface import ControlStats, DiagnosticStatus, Level, PerceptionState, PowerState
 
 
+RATE_SETTLED_S = 3.0  # a sensor's rate is judged once it has run this long (its first frames come unevenly)
+
+
 def _worst(*levels: Level) -> Level:
     rank = {Level.OK: 0, Level.WARN: 1, Level.STALE: 2, Level.ERROR: 3}
     return max(levels, key=rank.__getitem__, default=Level.OK)
@@ -158,7 +161,7 @@ def sensor_statuses(
             level, message = Level.OK, "starting"
         elif age > stale_s:
             level, message = Level.STALE, f"no {name} data for {age:.1f} s"
-        elif hz < limits.sensor_rate_warn_fraction * nominal_hz:
+        elif sim_time_s > RATE_SETTLED_S and hz < limits.sensor_rate_warn_fraction * nominal_hz:
             level, message = Level.WARN, f"{hz:.1f} Hz of {nominal_hz:g}"
         else:
             level, message = Level.OK, f"{hz:.1f} Hz"

@@ -56,6 +56,11 @@ class DiagnosticsMonitor:
             self._thread.join(timeout=5.0)
             self._thread = None
 
+    @property
+    def native_thread_id(self) -> int | None:
+        """The monitor thread's OS id (what its CPU time is read by)."""
+        return self._thread.native_id if self._thread is not None else None
+
     def latest(self) -> DiagnosticArray | None:
         with self._lock:
             return self._latest

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import multiprocessing as mp
 import time
-
 from collections.abc import Iterator
 
 import pytest
@@ -66,9 +65,11 @@ def test_every_group_is_reported_with_key_values(client) -> None:
 
 
 def test_an_overheating_servo_stops_the_robot_until_it_cools(client) -> None:
-    assert inject(client, "servo_heat", "r_knee", 52).status_code == 200
+    # to 77 C: past the diagnostics' limit (75), short of the servo's own shutdown (80)
+    heat = 77.0 - wait_until(lambda: status(client, "servos/r_knee"))["values"]["temperature_c"]
+    assert inject(client, "servo_heat", "r_knee", heat).status_code == 200
     hot = wait_status(client, "servos/r_knee", "ERROR")
-    assert "overheating" in hot["message"] and hot["stops_motion"]
+    assert hot["message"] == "overheating: 77 C (limit 75)" and hot["stops_motion"]
     state = wait_until(lambda: (s := client.get("/api/state").json())["estop_latched"] and s)
     assert state["mode"] == "estop"
     latched = wait_until(lambda: [e for e in client.get("/api/events").json() if e["kind"] == "estop/latched"])
@@ -77,7 +78,7 @@ def test_an_overheating_servo_stops_the_robot_until_it_cools(client) -> None:
     assert refused.status_code == 409 and "r_knee" in refused.json()["detail"]["message"]
     assert client.post("/api/commands", json={"text": "say hello"}).status_code == 409
     # cooled (a fan put on it): the alarm clears at the next sample and the operator may release the stop
-    assert inject(client, "servo_heat", "r_knee", -52).status_code == 200
+    assert inject(client, "servo_heat", "r_knee", -heat).status_code == 200
     wait_status(client, "servos/r_knee", "OK")
     wait_until(lambda: client.post("/api/estop/reset").status_code == 200)
     kinds = [e["kind"] for e in client.get("/api/events").json()]
@@ -190,3 +191,22 @@ def test_cpu_overload_is_a_warning(client) -> None:
         for b in burners:
             b.kill()
             b.join()
+
+
+def test_a_silent_robot_worker_turns_its_statuses_stale(settings) -> None:
+    """The robot's statuses are only as good as their last report: the server marks them STALE when it stops."""
+    from types import SimpleNamespace
+
+    from app.diagnostics import diagnostics_json, snapshot
+    from app.sessions.recorder import WriteStats
+    from robot.interface import DiagnosticArray, DiagnosticStatus, Level
+
+    old = DiagnosticArray(time.time() - 10, 42.0, (DiagnosticStatus("servos/r_knee", Level.OK, "40 C, 12 % load"),))
+    worker = SimpleNamespace(diagnostics=lambda: old, is_alive=lambda: False)
+    recorder = SimpleNamespace(stats=WriteStats(), backlog=lambda: 0, session_id=7)
+    rt = SimpleNamespace(worker=worker, recorder=recorder, settings=settings, browser_clients=0)
+    body = diagnostics_json(snapshot(rt))
+    knee = body["groups"]["servos"]["statuses"][0]
+    assert knee["level_name"] == "STALE" and knee["message"].startswith("no report from the robot for 10 s")
+    worker_link = next(s for s in body["groups"]["links"]["statuses"] if s["name"] == "links/robot_worker")
+    assert worker_link["level_name"] == "ERROR" and body["level_name"] == "ERROR"

@@ -177,6 +177,40 @@ def test_camera_stream_with_detections_map_and_a_search_from_the_page(page, serv
     expect(page.locator("#known-objects")).to_contain_text("green apple: kitchen counter")
 
 
+def test_diagnostics_plot_live_and_an_overheating_servo_alarms_and_stops_the_robot(page, server) -> None:
+    expect = playwright_api.expect
+    page.goto(server.url)
+    expect(page.locator("#diag-groups")).to_contain_text("servos", timeout=10_000)
+    expect(page.locator("#v-servo")).to_contain_text("°C", timeout=5_000)
+    page.wait_for_function("window.humanoid.diagnostics && document.getElementById('v-cpu').textContent !== '–'")
+    page.wait_for_timeout(2_500)  # a few samples: a line to draw
+    inked = page.evaluate(
+        "(() => { const c = document.getElementById('spark-servo');"
+        " return c.getContext('2d').getImageData(0, 0, c.width, c.height).data.filter((v, i) => i % 4 === 3 && v)"
+        ".length; })()"
+    )
+    assert inked > 20
+    # to 77 C: past the diagnostics' limit (75), short of the servo's own shutdown (80)
+    servos = server.get("/api/diagnostics")["groups"]["servos"]["statuses"]
+    knee = next(s for s in servos if s["name"] == "servos/l_knee")
+    heat = 77.0 - knee["values"]["temperature_c"]
+    assert server.post("/api/sim/faults", json={"fault": "servo_heat", "target": "l_knee", "value": heat}).is_success
+    banner = page.locator("#alarm-banner")
+    expect(banner).to_contain_text("servos/l_knee: overheating: 77 C", timeout=5_000)
+    expect(banner).to_contain_text("The robot is stopped")
+    expect(page.locator("#health")).to_have_text("health: ERROR")
+    expect(page.locator("#mode")).to_have_text("mode: estop")
+    expect(page.locator("#latched-banner")).to_be_visible()
+    page.click("#release")
+    expect(page.locator("#command-result")).to_contain_text("motion is unsafe until this is fixed")
+    page.click("#diag-groups summary:has-text('servos')")
+    expect(page.locator("#diag-groups tr[data-name='servos/l_knee']")).to_contain_text("temperature_c=")
+    assert server.post("/api/sim/faults", json={"fault": "servo_heat", "target": "l_knee", "value": -heat}).is_success
+    expect(banner).not_to_contain_text("l_knee", timeout=5_000)
+    page.click("#release")
+    expect(page.locator("#mode")).to_have_text("mode: idle", timeout=5_000)
+
+
 def test_sessions_page_shows_the_timeline_and_replays_from_an_entry(page, server) -> None:
     expect = playwright_api.expect
     page.goto(server.url + "/sessions")

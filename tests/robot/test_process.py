@@ -6,7 +6,7 @@ import time
 
 import pytest
 
-from robot.interface import EStop, Mode, PlanState, Refusal, ReleaseEStop, RunCommand
+from robot.interface import EStop, Fault, InjectFault, Level, Mode, PlanState, Refusal, ReleaseEStop, RunCommand
 from robot.process import WorkerProcess
 
 
@@ -63,3 +63,20 @@ def test_liveness_follows_the_child_process() -> None:
     assert not worker.is_alive()
     assert worker.submit(RunCommand("say hi")).refusal == Refusal.UNAVAILABLE
     worker.stop()
+
+
+def test_diagnostics_and_faults_cross_the_process_boundary(remote) -> None:
+    deadline = time.monotonic() + 10
+    while remote.diagnostics() is None and time.monotonic() < deadline:
+        time.sleep(0.1)
+    first = remote.diagnostics()
+    assert first is not None and len([s for s in first.statuses if s.group == "servos"]) == 24
+    assert remote.submit(InjectFault(Fault.BATTERY_SOC, value=0.15)).accepted
+    while time.monotonic() < deadline + 5:
+        battery = remote.diagnostics().find("power/battery")
+        if battery.level == Level.WARN:
+            break
+        time.sleep(0.1)
+    assert battery.level == Level.WARN and "battery low" in battery.message
+    refused = remote.submit(InjectFault(Fault.SERVO_HEAT, target="antenna", value=10))
+    assert not refused.accepted and refused.refusal == Refusal.INVALID and "no servo drives" in refused.message
