@@ -28,7 +28,7 @@ MAX_VOLTAGE_V = 16.0  # Max Voltage Limit default (address 32)
 STALL_TORQUE_NM = 4.1  # at 12 V
 STALL_CURRENT_A = 2.3
 OVERLOAD_LOAD_PCT = 95.0  # a load this high ...
-OVERLOAD_AFTER_S = 1.5  # ... held this long trips the overload bit
+OVERLOAD_AFTER_S = 3.0  # ... held this long trips the overload bit (a grasp pushes at stall for ~0.5 s)
 
 
 @dataclass(frozen=True)
@@ -38,6 +38,6 @@ class ServoReadings:
     temperature_c: np.ndarray
     current_a: np.ndarray
     voltage_v: np.ndarray
-    load_pct: np.ndarray  # of the stall torque, unsigned
+    load_pct: np.ndarray  # of the stall torque, unsigned, averaged over about a second
     position_error_rad: np.ndarray  # goal minus present position
     error_bits: np.ndarray  # HardwareError per servo (int)

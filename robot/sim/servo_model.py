@@ -18,6 +18,8 @@ from robot.hardware import xm430
 from robot.hardware.xm430 import HardwareError, ServoReadings
 from robot.power.battery import ServoElectrical
 
+LOAD_AVERAGE_S = 1.0  # the load reported is averaged this long, as the servo's Present Load is smoothed
+
 
 @dataclass(frozen=True)
 class ThermalSpec:
@@ -62,7 +64,8 @@ class SimulatedServos:
         torque = np.maximum(
             np.abs(np.asarray(torques, dtype=float)) * self._scale, self._jammed_pct / 100.0 * xm430.STALL_TORQUE_NM
         )
-        self._load = torque / xm430.STALL_TORQUE_NM * 100.0
+        load = torque / xm430.STALL_TORQUE_NM * 100.0
+        self._load += (load - self._load) * min(1.0, dt_s / LOAD_AVERAGE_S)
         self._current = self.electrical.currents_a(torque)
         self._error = np.asarray(targets, dtype=float) - np.asarray(positions, dtype=float)
         self._voltage[:] = bus_v
@@ -70,7 +73,7 @@ class SimulatedServos:
         spec = self.thermal
         cooling_w = (self.temperature_c - spec.ambient_c) / spec.winding_to_ambient_k_per_w
         self.temperature_c += (heat_w - cooling_w) * dt_s / spec.heat_capacity_j_per_k
-        loaded = self._load >= xm430.OVERLOAD_LOAD_PCT
+        loaded = load >= xm430.OVERLOAD_LOAD_PCT
         self._overloaded_s = np.where(loaded, self._overloaded_s + dt_s, 0.0)
         self._bits |= np.where(self.temperature_c >= xm430.TEMPERATURE_LIMIT_C, int(HardwareError.OVERHEATING), 0)
         self._bits |= np.where(self._overloaded_s >= xm430.OVERLOAD_AFTER_S, int(HardwareError.OVERLOAD), 0)

@@ -87,7 +87,7 @@ def test_an_overheating_servo_stops_the_robot_until_it_cools(client) -> None:
 
 def test_a_jammed_servo_trips_its_overload_protection(client) -> None:
     inject(client, "servo_overload", "l_ank_pitch", 100)
-    jammed = wait_status(client, "servos/l_ank_pitch", "ERROR")
+    jammed = wait_status(client, "servos/l_ank_pitch", "ERROR", timeout=10)  # held 3 s at stall, then sampled
     assert "overload" in jammed["message"] and jammed["values"]["hardware_error"] & 0x20
     wait_until(lambda: client.get("/api/state").json()["estop_latched"])
     inject(client, "clear")  # the jam removed, the servo rebooted: its error bit clears
