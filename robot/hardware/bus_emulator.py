@@ -1,0 +1,301 @@
+"""A Dynamixel Protocol 2.0 bus with XM430s behind a pseudo-terminal: the real `dynamixel-sdk` opens its path as
+it would a U2D2's /dev/ttyUSB0. For tests and benchmarks of the hardware backend without hardware.
+
+Each emulated servo has the XM430 control table, a simple motor (position control with the servo's no-load
+speed, current from the load, winding temperature) and faults to inject: a dead servo, dropped replies
+(timeouts), corrupted replies (CRC errors), overheating. It answers ping, read, write, sync read, sync write and
+reboot (broadcast ping and sync read answered in ID order); with `wire_time` the emulator also takes the time
+the bytes would take on the wire at the bus's baud rate.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import select
+import threading
+import time
+import tty
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+from robot.hardware import control_table as ct
+from robot.hardware.protocol2 import ALERT_BIT, BROADCAST_ID, Instruction, Packet, PacketParser, StatusError, status
+from robot.hardware.xm430 import HardwareError
+
+NO_LOAD_SPEED_RAD_S = 46.0 * 2 * math.pi / 60  # 46 rpm at 12 V
+STALL_TORQUE_NM = 4.1
+RESISTANCE_OHM = 12.0 / 2.3
+THERMAL_K_PER_W, THERMAL_TAU_S = 6.0, 360.0
+
+
+@dataclass
+class ServoFaults:
+    dead: bool = False  # answers nothing at all
+    drop_replies: int = 0  # the next n replies are not sent (the master times out)
+    corrupt_replies: int = 0  # the next n replies carry a wrong CRC
+
+
+class EmulatedXM430:
+    def __init__(self, servo_id: int, position_rad: float = 0.0, ambient_c: float = 25.0) -> None:
+        self.table = bytearray(ct.TABLE_SIZE)
+        self.faults = ServoFaults()
+        self.ambient_c = ambient_c
+        self.temperature_c = ambient_c
+        self.load_nm = 0.0  # external torque on the output (gravity, a jam): what the servo must hold
+        self.voltage_v = 12.0
+        self._position = position_rad
+        self._velocity = 0.0
+        for field, value in ((ct.MODEL_NUMBER, ct.XM430_W350_MODEL), (ct.FIRMWARE_VERSION, 48), (ct.ID, servo_id),
+                             (ct.BAUD_RATE, 3), (ct.RETURN_DELAY_TIME, 0), (ct.OPERATING_MODE, 3),
+                             (ct.TEMPERATURE_LIMIT, 80), (ct.MAX_VOLTAGE_LIMIT, 160), (ct.MIN_VOLTAGE_LIMIT, 95),
+                             (ct.CURRENT_LIMIT, 1193), (ct.MAX_POSITION_LIMIT, 4095), (ct.MIN_POSITION_LIMIT, 0),
+                             (ct.SHUTDOWN, 0x34), (ct.STATUS_RETURN_LEVEL, 2), (ct.POSITION_P_GAIN, 800),
+                             (ct.PROFILE_VELOCITY, 0)):  # fmt: skip
+            self._set(field, value)
+        self._set(ct.GOAL_POSITION, self._ticks(position_rad))
+        self._refresh_present()
+
+    @property
+    def servo_id(self) -> int:
+        return self.get(ct.ID)
+
+    def get(self, field: ct.Field) -> int:
+        return field.decode(bytes(self.table[field.address : field.address + field.size]))
+
+    def _set(self, field: ct.Field, value: int) -> None:
+        self.table[field.address : field.address + field.size] = field.encode(value)
+
+    @staticmethod
+    def _ticks(rad: float) -> int:
+        return round(rad * ct.POSITION_PER_RAD + ct.POSITION_CENTRE)
+
+    @property
+    def position_rad(self) -> float:
+        return self._position
+
+    # the motor -----------------------------------------------------------------------------------------------
+
+    def step(self, dt: float) -> None:
+        torque_on = self.get(ct.TORQUE_ENABLE) == 1
+        if torque_on:
+            goal = (self.get(ct.GOAL_POSITION) - ct.POSITION_CENTRE) / ct.POSITION_PER_RAD
+            error = goal - self._position
+            speed = max(-NO_LOAD_SPEED_RAD_S, min(NO_LOAD_SPEED_RAD_S, error / max(dt, 0.02)))
+            # the load slows it down, and past stall it cannot hold
+            slack = max(0.0, 1.0 - abs(self.load_nm) / STALL_TORQUE_NM)
+            self._velocity = speed * slack
+            torque = min(STALL_TORQUE_NM, abs(self.load_nm) + abs(error) * 8.0)
+        else:
+            self._velocity = 0.0
+            torque = 0.0
+        self._position += self._velocity * dt
+        current = torque / STALL_TORQUE_NM * 2.3 + 0.04 * torque_on
+        heat = current**2 * RESISTANCE_OHM
+        self.temperature_c += dt / THERMAL_TAU_S * (heat * THERMAL_K_PER_W - (self.temperature_c - self.ambient_c))
+        errors = HardwareError(self.get(ct.HARDWARE_ERROR_STATUS))
+        if self.temperature_c >= self.get(ct.TEMPERATURE_LIMIT):
+            errors |= HardwareError.OVERHEATING
+        if not self.get(ct.MIN_VOLTAGE_LIMIT) <= self.voltage_v * 10 <= self.get(ct.MAX_VOLTAGE_LIMIT):
+            errors |= HardwareError.INPUT_VOLTAGE
+        self._set(ct.HARDWARE_ERROR_STATUS, int(errors))
+        if int(errors) & self.get(ct.SHUTDOWN):
+            self._set(ct.TORQUE_ENABLE, 0)  # the servo protects itself: torque off until rebooted
+        self._current_a = current if torque_on else 0.0
+        self._refresh_present()
+
+    def _refresh_present(self) -> None:
+        self._set(ct.PRESENT_POSITION, self._ticks(self._position))
+        self._set(ct.PRESENT_VELOCITY, round(self._velocity / ct.VELOCITY_UNIT_RAD_S))
+        self._set(ct.PRESENT_CURRENT, round(getattr(self, "_current_a", 0.0) / ct.CURRENT_UNIT_A))
+        self._set(ct.PRESENT_INPUT_VOLTAGE, round(self.voltage_v * 10))
+        self._set(ct.PRESENT_TEMPERATURE, max(0, min(255, round(self.temperature_c))))
+        self._set(ct.MOVING, int(abs(self._velocity) > 0.01))
+
+    # the control table through the protocol ------------------------------------------------------------------
+
+    def read(self, address: int, length: int) -> tuple[int, bytes]:
+        if length < 1 or address + length > ct.TABLE_SIZE:
+            return StatusError.DATA_LENGTH, b""
+        return StatusError.NONE, bytes(self.table[address : address + length])
+
+    def write(self, address: int, data: bytes) -> int:
+        if not data or address + len(data) > ct.TABLE_SIZE:
+            return StatusError.DATA_LENGTH
+        if address < ct.EEPROM_END and self.get(ct.TORQUE_ENABLE):
+            return StatusError.ACCESS  # EEPROM is locked while torque is on
+        if address <= ct.HARDWARE_ERROR_STATUS.address < address + len(data):
+            return StatusError.ACCESS  # read-only
+        latched = self.get(ct.HARDWARE_ERROR_STATUS) & self.get(ct.SHUTDOWN)
+        enables = address <= ct.TORQUE_ENABLE.address < address + len(data) and data[ct.TORQUE_ENABLE.address - address]
+        if latched and enables:
+            return StatusError.RESULT_FAIL  # no torque while a shutdown error is latched
+        if address <= ct.GOAL_POSITION.address and address + len(data) >= ct.GOAL_POSITION.address + 4:
+            offset = ct.GOAL_POSITION.address - address
+            goal = ct.GOAL_POSITION.decode(data[offset : offset + 4])
+            if not self.get(ct.MIN_POSITION_LIMIT) <= goal <= self.get(ct.MAX_POSITION_LIMIT):
+                return StatusError.DATA_LIMIT
+        self.table[address : address + len(data)] = data
+        return StatusError.NONE
+
+    def reboot(self) -> None:
+        self._set(ct.HARDWARE_ERROR_STATUS, 0)
+        self._set(ct.TORQUE_ENABLE, 0)
+        if self.temperature_c >= self.get(ct.TEMPERATURE_LIMIT):
+            self._set(ct.HARDWARE_ERROR_STATUS, int(HardwareError.OVERHEATING))
+
+    def error_byte(self, error: int) -> int:
+        return int(error) | (ALERT_BIT if self.get(ct.HARDWARE_ERROR_STATUS) else 0)
+
+
+@dataclass
+class BusStats:
+    bytes_in: int = 0
+    bytes_out: int = 0
+    packets_in: int = 0
+    replies: int = 0
+    busy_s: float = 0.0  # wire time of everything sent both ways, at the bus's baud rate
+
+
+class BusEmulator:
+    """Servos on a pseudo-terminal. Use as a context manager; `port_name` is what the SDK opens."""
+
+    def __init__(self, servos: Iterable[EmulatedXM430], baudrate: int = 1_000_000, wire_time: bool = False,
+                 motor_hz: float = 500.0) -> None:  # fmt: skip
+        self.servos = {s.servo_id: s for s in servos}
+        self.baudrate = baudrate
+        self.wire_time = wire_time
+        self.motor_period = 1.0 / motor_hz
+        self.stats = BusStats()
+        self._lock = threading.RLock()
+        self._master, self._slave = os.openpty()
+        tty.setraw(self._slave)
+        self.port_name = os.ttyname(self._slave)
+        self._parser = PacketParser()
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    def __enter__(self) -> BusEmulator:
+        self.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    def start(self) -> None:
+        self._thread = threading.Thread(target=self._run, name="dynamixel-emulator", daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=2)
+        for fd in (self._master, self._slave):
+            with contextlib.suppress(OSError):
+                os.close(fd)
+
+    def servo(self, servo_id: int) -> EmulatedXM430:
+        return self.servos[servo_id]
+
+    @property
+    def lock(self) -> threading.RLock:
+        """Hold it to change servos (loads, faults) consistently with the bus thread."""
+        return self._lock
+
+    # the bus ---------------------------------------------------------------------------------------------------
+
+    def _run(self) -> None:
+        last = time.perf_counter()
+        while not self._stop.is_set():
+            try:
+                ready, _, _ = select.select([self._master], [], [], self.motor_period)
+            except (OSError, ValueError):
+                return
+            now = time.perf_counter()
+            with self._lock:
+                if now - last >= self.motor_period:
+                    for servo in self.servos.values():
+                        servo.step(now - last)
+                    last = now
+                if not ready:
+                    continue
+                try:
+                    data = os.read(self._master, 4096)
+                except OSError:
+                    return
+                self.stats.bytes_in += len(data)
+                for packet in self._parser.feed(data):
+                    self.stats.packets_in += 1
+                    self._wire(len(data))
+                    for reply in self._answer(packet):
+                        self._send(reply)
+
+    def _wire(self, nbytes: int) -> None:
+        seconds = nbytes * 10 / self.baudrate  # 8 data bits, a start and a stop bit
+        self.stats.busy_s += seconds
+        if self.wire_time:
+            time.sleep(seconds)
+
+    def _send(self, reply: bytes) -> None:
+        self._wire(len(reply))
+        self.stats.bytes_out += len(reply)
+        self.stats.replies += 1
+        os.write(self._master, reply)
+
+    def _reply(self, servo: EmulatedXM430, error: int, params: bytes = b"", is_read: bool = False) -> list[bytes]:
+        faults = servo.faults
+        level = servo.get(ct.STATUS_RETURN_LEVEL)
+        if faults.dead or (level == 0) or (level == 1 and not is_read):
+            return []
+        if faults.drop_replies > 0:
+            faults.drop_replies -= 1
+            return []
+        packet = status(servo.servo_id, servo.error_byte(error), params)
+        if faults.corrupt_replies > 0:
+            faults.corrupt_replies -= 1
+            packet = packet[:-1] + bytes([packet[-1] ^ 0xFF])
+        return [packet]
+
+    def _answer(self, packet: Packet) -> list[bytes]:
+        p = packet.params
+        target = self.servos.get(packet.packet_id)
+        if not packet.crc_ok:
+            return self._reply(target, StatusError.CRC) if target is not None else []
+        instruction = packet.instruction
+        if instruction == Instruction.PING:
+            servos = sorted(self.servos.values(), key=lambda s: s.servo_id) if packet.packet_id == BROADCAST_ID \
+                else [target] if target is not None else []  # fmt: skip
+            out = []
+            for servo in servos:
+                info = ct.MODEL_NUMBER.encode(servo.get(ct.MODEL_NUMBER)) + bytes([servo.get(ct.FIRMWARE_VERSION)])
+                if not servo.faults.dead:  # a ping is answered whatever the status return level
+                    out.append(status(servo.servo_id, servo.error_byte(0), info))
+            return out
+        if instruction == Instruction.SYNC_READ and packet.packet_id == BROADCAST_ID and len(p) >= 4:
+            address, length = p[0] | p[1] << 8, p[2] | p[3] << 8
+            out = []
+            for servo_id in p[4:]:
+                servo = self.servos.get(servo_id)
+                if servo is not None:
+                    error, data = servo.read(address, length)
+                    out += self._reply(servo, error, data, is_read=True)
+            return out
+        if instruction == Instruction.SYNC_WRITE and packet.packet_id == BROADCAST_ID and len(p) >= 4:
+            address, length = p[0] | p[1] << 8, p[2] | p[3] << 8
+            for i in range(4, len(p) - length, length + 1):
+                servo = self.servos.get(p[i])
+                if servo is not None and not servo.faults.dead:
+                    servo.write(address, p[i + 1 : i + 1 + length])
+            return []
+        if target is None:
+            return []  # nobody with that ID on the bus
+        if instruction == Instruction.READ and len(p) == 4:
+            error, data = target.read(p[0] | p[1] << 8, p[2] | p[3] << 8)
+            return self._reply(target, error, data, is_read=True)
+        if instruction == Instruction.WRITE and len(p) >= 3:
+            return self._reply(target, target.write(p[0] | p[1] << 8, p[2:]))
+        if instruction == Instruction.REBOOT:
+            target.reboot()
+            return self._reply(target, StatusError.NONE)
+        return self._reply(target, StatusError.INSTRUCTION)

@@ -1,0 +1,119 @@
+"""The Protocol 2.0 bus emulator, driven by the real dynamixel-sdk through its pseudo-terminal, as a U2D2 would be."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+
+import pytest
+from dynamixel_sdk import (
+    COMM_RX_CORRUPT,
+    COMM_RX_TIMEOUT,
+    COMM_SUCCESS,
+    GroupSyncRead,
+    GroupSyncWrite,
+    PacketHandler,
+    PortHandler,
+)
+
+from robot.hardware import control_table as ct
+from robot.hardware.bus_emulator import BusEmulator, EmulatedXM430
+from robot.hardware.protocol2 import ALERT_BIT, PacketParser, crc16, encode, stuff, unstuff
+from robot.hardware.xm430 import HardwareError
+
+IDS = list(range(1, 25))
+
+
+def test_crc_and_stuffing_follow_the_specification() -> None:
+    # the specification's example: read 4 bytes at 132 from ID 1 ends with CRC 1D 15
+    assert crc16(bytes.fromhex("fffffd0001070002840004 00".replace(" ", ""))) == 0x151D
+    assert stuff(b"\x03\xff\xff\xfd\x10") == b"\x03\xff\xff\xfd\xfd\x10"
+    assert unstuff(stuff(b"\x03\xff\xff\xfd\x10")) == b"\x03\xff\xff\xfd\x10"
+    packet = encode(1, 0x03, b"\xff\xff\xfd\x10")
+    (parsed,) = PacketParser().feed(b"\x00junk" + packet)
+    assert parsed.params == b"\xff\xff\xfd\x10" and parsed.crc_ok
+    (broken,) = PacketParser().feed(packet[:-1] + b"\x00")
+    assert not broken.crc_ok
+
+
+@pytest.fixture
+def bus() -> Iterator[tuple[BusEmulator, PortHandler, PacketHandler]]:
+    with BusEmulator([EmulatedXM430(i) for i in IDS]) as emulator:
+        port = PortHandler(emulator.port_name)
+        assert port.openPort() and port.setBaudRate(1_000_000)
+        yield emulator, port, PacketHandler(2.0)
+        port.closePort()
+
+
+def test_every_servo_answers_a_ping_with_its_model(bus) -> None:
+    _emulator, port, packets = bus
+    for servo_id in IDS:
+        model, result, error = packets.ping(port, servo_id)
+        assert (model, result, error) == (ct.XM430_W350_MODEL, COMM_SUCCESS, 0)
+    found, result = packets.broadcastPing(port)
+    assert result == COMM_SUCCESS and sorted(found) == IDS and found[5] == [ct.XM430_W350_MODEL, 48]
+    _, result, _ = packets.ping(port, 99)
+    assert result == COMM_RX_TIMEOUT  # nobody there
+
+
+def test_sync_write_moves_every_servo_and_sync_read_reads_them_all(bus) -> None:
+    _emulator, port, packets = bus
+    torque = GroupSyncWrite(port, packets, ct.TORQUE_ENABLE.address, 1)
+    goal = GroupSyncWrite(port, packets, ct.GOAL_POSITION.address, 4)
+    for servo_id in IDS:
+        torque.addParam(servo_id, [1])
+        goal.addParam(servo_id, list(ct.GOAL_POSITION.encode(2048 + 10 * servo_id)))
+    assert torque.txPacket() == COMM_SUCCESS and goal.txPacket() == COMM_SUCCESS
+    reader = GroupSyncRead(port, packets, ct.PRESENT_POSITION.address, 4)
+    for servo_id in IDS:
+        reader.addParam(servo_id)
+    deadline = time.monotonic() + 3
+    while True:
+        assert reader.txRxPacket() == COMM_SUCCESS
+        positions = {i: reader.getData(i, ct.PRESENT_POSITION.address, 4) for i in IDS}
+        if all(abs(positions[i] - (2048 + 10 * i)) <= 1 for i in IDS) or time.monotonic() > deadline:
+            break
+    assert all(abs(positions[i] - (2048 + 10 * i)) <= 1 for i in IDS)
+    temperature, result, _ = packets.read1ByteTxRx(port, 3, ct.PRESENT_TEMPERATURE.address)
+    assert result == COMM_SUCCESS and 20 <= temperature <= 40
+
+
+def test_eeprom_is_locked_while_torque_is_on_and_limits_are_enforced(bus) -> None:
+    _emulator, port, packets = bus
+    result, error = packets.write1ByteTxRx(port, 1, ct.TORQUE_ENABLE.address, 1)
+    assert (result, error) == (COMM_SUCCESS, 0)
+    result, error = packets.write1ByteTxRx(port, 1, ct.OPERATING_MODE.address, 1)
+    assert result == COMM_SUCCESS and error == 7  # access error
+    result, error = packets.write4ByteTxRx(port, 1, ct.GOAL_POSITION.address, 5000)
+    assert error == 6  # beyond the position limit
+
+
+def test_faults_a_dead_servo_timeouts_crc_errors_and_overheating(bus) -> None:
+    emulator, port, packets = bus
+    with emulator.lock:
+        emulator.servo(4).faults.dead = True
+        emulator.servo(5).faults.drop_replies = 1
+        emulator.servo(6).faults.corrupt_replies = 1
+    assert packets.ping(port, 4)[1] == COMM_RX_TIMEOUT
+    assert packets.read4ByteTxRx(port, 5, ct.PRESENT_POSITION.address)[1] == COMM_RX_TIMEOUT
+    assert packets.read4ByteTxRx(port, 5, ct.PRESENT_POSITION.address)[1] == COMM_SUCCESS  # only the one dropped
+    assert packets.read4ByteTxRx(port, 6, ct.PRESENT_POSITION.address)[1] == COMM_RX_CORRUPT
+    reader = GroupSyncRead(port, packets, ct.PRESENT_POSITION.address, 4)
+    for servo_id in (3, 4):
+        reader.addParam(servo_id)
+    # the SDK fails the whole sync read on the first servo that does not answer, having read the ones before it
+    assert reader.txRxPacket() == COMM_RX_TIMEOUT
+    assert len(reader.data_dict[3]) == 4 and not reader.data_dict[4]
+
+    packets.write1ByteTxRx(port, 7, ct.TORQUE_ENABLE.address, 1)
+    with emulator.lock:
+        emulator.servo(7).temperature_c = 85.0
+    time.sleep(0.05)
+    value, result, error = packets.read1ByteTxRx(port, 7, ct.HARDWARE_ERROR_STATUS.address)
+    assert result == COMM_SUCCESS and error & ALERT_BIT and HardwareError(value) == HardwareError.OVERHEATING
+    assert packets.read1ByteTxRx(port, 7, ct.TORQUE_ENABLE.address)[0] == 0  # it cut its own torque
+    assert packets.write1ByteTxRx(port, 7, ct.TORQUE_ENABLE.address, 1)[1] == ALERT_BIT | 1  # refused: latched
+    with emulator.lock:
+        emulator.servo(7).temperature_c = 40.0
+    assert packets.reboot(port, 7)[0] == COMM_SUCCESS
+    assert packets.read1ByteTxRx(port, 7, ct.HARDWARE_ERROR_STATUS.address)[:2] == (0, COMM_SUCCESS)
