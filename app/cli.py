@@ -1,4 +1,4 @@
-"""The `humanoid` command: serve, run, transcribe, plan, estop, sessions, db upgrade, bench."""
+"""The `humanoid` command: serve, run, transcribe, plan, estop, sessions, hardware, db upgrade, bench."""
 
 from __future__ import annotations
 
@@ -6,6 +6,7 @@ import argparse
 import json
 import sys
 
+from app.hardware_cli import add_hardware_parser
 from app.sessions.cli import add_sessions_parser
 from app.settings import Settings, get_settings
 
@@ -16,7 +17,10 @@ def _serve(args: argparse.Namespace, settings: Settings) -> int:
     from app.main import create_app
     from app.sessions.db import upgrade_to_head
 
-    overrides = {"seed": args.seed, "enable_mirror": not args.no_mirror, "host": args.host, "port": args.port}
+    http_port, device = _split_port(args.port)
+    overrides = {"seed": args.seed, "enable_mirror": not args.no_mirror, "host": args.host,
+                 "port": args.http_port or http_port, "backend": args.backend, "dynamixel_port": device,
+                 "robot_config": args.robot_config}  # fmt: skip
     settings = settings.model_copy(update={k: v for k, v in overrides.items() if v is not None})
     if args.viser_port is not None:
         settings = settings.model_copy(update={"viser_port": args.viser_port})
@@ -31,6 +35,13 @@ def _serve(args: argparse.Namespace, settings: Settings) -> int:
     )
     uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_level="warning", ws_max_size=65536)
     return 0
+
+
+def _split_port(value: str | None) -> tuple[int | None, str | None]:
+    """`--port 8000` is the HTTP port; `--port /dev/ttyUSB0` (anything not a number) the real robot's bus."""
+    if value is None:
+        return None, None
+    return (int(value), None) if value.isdigit() else (None, value)
 
 
 def _transcribe_file(path: str, engine: str | None, seed: int, settings: Settings) -> dict:
@@ -184,7 +195,13 @@ def build_parser() -> argparse.ArgumentParser:
 
     serve = sub.add_parser("serve", help="start the web app with the simulated robot (real time)")
     serve.add_argument("--host", default=None, help="interface to bind (default 127.0.0.1, or HOST)")
-    serve.add_argument("--port", type=int, default=None, help="HTTP port (default 8000, or PORT)")
+    serve.add_argument("--port", default=None,
+                       help="HTTP port (default 8000, or PORT); with --backend dynamixel, a serial device such as "
+                       "/dev/ttyUSB0 is the U2D2's")  # fmt: skip
+    serve.add_argument("--http-port", type=int, default=None, help="HTTP port, when --port names the servo bus")
+    serve.add_argument("--backend", choices=["sim", "dynamixel"], default=None,
+                       help="sim (MuJoCo, the default) or dynamixel (the real robot's XM430s)")  # fmt: skip
+    serve.add_argument("--robot-config", default=None, help="the real robot's configuration file (robot.toml)")
     serve.add_argument(
         "--viser-port",
         type=int,
@@ -226,13 +243,14 @@ def build_parser() -> argparse.ArgumentParser:
     estop.set_defaults(func=_estop)
 
     add_sessions_parser(sub)
+    add_hardware_parser(sub)
 
     db = sub.add_parser("db", help="database maintenance")
     db_sub = db.add_subparsers(dest="db_command", required=True)
     db_sub.add_parser("upgrade", help="apply pending migrations").set_defaults(func=_db)
 
     bench = sub.add_parser("bench", help="benchmarks, written as JSON")
-    suites = ["core", "walk", "perception", "capstone", "planner", "voice", "sessions", "diagnostics"]
+    suites = ["core", "walk", "perception", "capstone", "planner", "voice", "sessions", "diagnostics", "dynamixel"]
     bench.add_argument("suite", choices=suites)
     bench.add_argument("--json", action="store_true", help="print the JSON result")
     bench.add_argument("--output", default=None, help="also write the JSON result to this file")
@@ -241,9 +259,9 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument(
         "--duration",
         type=float,
-        default=30.0,
+        default=None,
         help="core: seconds of control-loop timing (>= 30 s: the tick window); sessions: seconds per phase; "
-        "diagnostics: seconds of monitoring measured",
+        "diagnostics: seconds of monitoring measured (60); dynamixel: seconds per phase (10); default 30",
     )
     bench.add_argument("--session-minutes", type=float, default=10.0, help="sessions: length of the long session")
     bench.add_argument("--scripts", type=int, default=20, help="walk: random velocity scripts to run")

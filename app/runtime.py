@@ -47,6 +47,11 @@ class Runtime:
         engine = make_engine(settings.database_url)
         db = make_session_factory(engine)
         close_interrupted_sessions(db)
+        if worker is None and settings.backend == "dynamixel":
+            from robot.hardware.worker import HardwareWorker
+
+            worker = HardwareWorker(settings.hardware_config(), generate_world(settings.seed),
+                                    diagnostics=settings.diagnostics, disk_path=settings.data_dir)  # fmt: skip
         if worker is None:
             worker = (
                 WorkerProcess(

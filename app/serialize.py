@@ -31,6 +31,7 @@ def state_json(state: RobotState, include_qpos: bool = False) -> dict[str, Any]:
         "proprioception": dataclasses.asdict(state.proprioception) if state.proprioception is not None else None,
         "navigation": dataclasses.asdict(state.navigation) if state.navigation is not None else None,
         "approval_required": state.approval_required,
+        "torque_enabled": state.torque_enabled,
     }
     if include_qpos:
         out["qpos"] = list(state.qpos)

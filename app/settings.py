@@ -3,6 +3,7 @@ conventional DATABASE_URL, HOST and PORT, which are read as they are."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from functools import lru_cache
 from pathlib import Path
 from typing import Literal
@@ -11,6 +12,7 @@ from pydantic import AliasChoices, Field
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from robot.diagnostics.thresholds import Thresholds
+from robot.hardware.config import HardwareConfig, default_config, load_config
 from robot.planning.pipeline import PlannerConfig
 from robot.speech.robot_voice import VoiceConfig
 
@@ -31,7 +33,9 @@ class Settings(BaseSettings):
     viser_port: int = Field(8081, ge=1, le=65535, description="port of the 3D view for browsers with a GPU")
     viser_light_port: int = Field(8082, ge=1, le=65535, description="port of the light 3D view (software WebGL)")
     viser_host: str = Field("127.0.0.1", description="interface the viser server binds to")
-    backend: Literal["sim"] = "sim"
+    backend: Literal["sim", "dynamixel"] = Field("sim", description="sim (MuJoCo) or dynamixel (the real robot)")
+    robot_config: str = Field(str(REPO_ROOT / "robot.toml"), description="the real robot's servos (see README)")
+    dynamixel_port: str = Field("", description="the U2D2's serial device; overrides the robot configuration's")
     seed: int = Field(0, ge=0)
     control_hz: float = Field(100.0, gt=0, le=1000)
     mirror_hz: float = Field(30.0, gt=0, le=120)
@@ -94,6 +98,12 @@ class Settings(BaseSettings):
         return VoiceConfig(microphone=self.microphone, speaker=self.speaker, engine=self.asr_engine,
                            whisper_model_dir=self.whisper_model_dir, auto_run=self.voice_auto_run,
                            spool_dir=str(Path(self.audio_dir) / "incoming"))  # fmt: skip
+
+    def hardware_config(self) -> HardwareConfig:
+        """The robot configuration file (the humanoid_v1 defaults when there is none yet), with the port set here."""
+        path = Path(self.robot_config)
+        config = load_config(path) if path.exists() else default_config()
+        return replace(config, port=self.dynamixel_port) if self.dynamixel_port else config
 
     def planner_config(self) -> PlannerConfig:
         return PlannerConfig(

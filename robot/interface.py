@@ -190,6 +190,15 @@ class StopTeleop:
     source: str = "api"
 
 
+@dataclass(frozen=True)
+class SetTorque:
+    """Real robot: turn every servo's torque on (it first holds where it stands) or off. Torque is off at start-up
+    until the operator turns it on; it is refused on while the e-stop is latched or a servo is lost."""
+
+    enabled: bool
+    source: str = "api"
+
+
 class Posture(StrEnum):
     STAND = "stand"  # the walk-ready stance every walk starts from and ends in
     CROUCH = "crouch"
@@ -236,7 +245,7 @@ class ResetRobot:
 
 
 PlanCommand = RunCommand | ExecutePlan | Replan | CancelPlan | ApprovePlan | PausePlan | ResumePlan | SetApproval
-MotionCommand = Teleop | StopTeleop | SetPosture | ResetRobot | PlaceObstacle | InjectFault
+MotionCommand = Teleop | StopTeleop | SetPosture | ResetRobot | PlaceObstacle | InjectFault | SetTorque
 Command = PlanCommand | MotionCommand | EStop | ReleaseEStop
 
 
@@ -469,6 +478,7 @@ class RobotState:
     navigation: NavigationState | None = None
     approval_required: bool = False  # plans wait for the operator's approval before they run
     power: PowerState | None = None
+    torque_enabled: bool | None = None  # the real robot's servos (None in simulation, where they are always on)
 
 
 @dataclass(frozen=True)

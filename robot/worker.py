@@ -74,6 +74,7 @@ from robot.interface import (
     SensorFeed,
     SetApproval,
     SetPosture,
+    SetTorque,
     StepState,
     StepStatus,
     StopTeleop,
@@ -360,6 +361,9 @@ class RobotWorker:
             return self._place_obstacle(command)
         if isinstance(command, InjectFault):
             return self._inject_fault(command)
+        if isinstance(command, SetTorque):
+            return CommandReply(False, "the simulated servos are always powered: torque is for the real robot",
+                                Refusal.UNSUPPORTED)  # fmt: skip
         return CommandReply(False, f"unknown command type {type(command).__name__}", Refusal.INVALID)
 
     def state(self) -> RobotState:

@@ -28,6 +28,7 @@ from robot.interface import (
     RunCommand,
     SetApproval,
     SetPosture,
+    SetTorque,
     StopTeleop,
     Teleop,
 )
@@ -239,6 +240,18 @@ class ObstacleIn(BaseModel):
 def place_obstacle(body: ObstacleIn, rt: RuntimeDep) -> dict[str, Any]:
     """Simulation: drop an obstacle into the world (e.g. across the robot's path, to see it replan)."""
     return _accepted(rt, PlaceObstacle(body.x, body.y))
+
+
+class TorqueIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    enabled: bool
+
+
+@router.post("/torque")
+def torque(body: TorqueIn, rt: RuntimeDep) -> dict[str, Any]:
+    """Real robot: every servo's torque on (it first holds where it stands) or off; 501 in simulation, 409 while
+    the e-stop is latched."""
+    return _accepted(rt, SetTorque(body.enabled, source="api"))
 
 
 @router.post("/reset")

@@ -12,7 +12,7 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
     if suite == "core":
         from app.bench.core import run_core
 
-        result = run_core(presses=args.presses, viewers=args.viewers, duration_s=args.duration)
+        result = run_core(presses=args.presses, viewers=args.viewers, duration_s=args.duration or 30.0)
     elif suite == "walk":
         from app.bench.walk import run_walk
 
@@ -46,11 +46,15 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
     elif suite == "sessions":
         from app.bench.sessions import run_sessions
 
-        result = run_sessions(phase_s=args.duration, session_minutes=args.session_minutes)
+        result = run_sessions(phase_s=args.duration or 30.0, session_minutes=args.session_minutes)
+    elif suite == "dynamixel":
+        from app.bench.dynamixel import run_dynamixel
+
+        result = run_dynamixel(seconds=args.duration or 10.0)
     elif suite == "diagnostics":
         from app.bench.diagnostics import run_diagnostics
 
-        result = run_diagnostics(duration_s=args.duration)
+        result = run_diagnostics(duration_s=args.duration or 60.0)
     elif suite == "voice":
         from app.bench.voice import run_voice
 

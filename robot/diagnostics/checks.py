@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 
 import numpy as np
 
@@ -57,7 +57,11 @@ def control_status(
 
 
 def servo_statuses(
-    names: Sequence[str], readings: ServoReadings, limits: Thresholds, hardware_ids: Sequence[str] | None = None
+    names: Sequence[str],
+    readings: ServoReadings,
+    limits: Thresholds,
+    hardware_ids: Sequence[str] | None = None,
+    lost: Collection[str] = (),
 ) -> list[DiagnosticStatus]:
     """One status per servo. Overheating, overload and a bad supply stop the robot; so does any hardware error bit
     (the servo has cut its own torque)."""
@@ -77,7 +81,9 @@ def servo_statuses(
             ("hardware_error_text", bits.describe()),
         )
         hardware_id = hardware_ids[i] if hardware_ids else f"XM430-W350 #{i + 1}"
-        if bits:
+        if name in lost:
+            level, message = Level.ERROR, "not answering on the bus"
+        elif bits:
             level, message = Level.ERROR, f"hardware error: {bits.describe()}"
         elif temperature >= limits.servo_temperature_error_c:
             level, message = (

@@ -35,6 +35,9 @@ class RobotReadings:
     imu_stamp: Callable[[], float | None]
     voice: Callable[[], Any]  # the RobotVoice, or None when voice is not set up
     sensor_hz: float
+    has_imu: bool = True
+    lost_servos: Callable[[], tuple[str, ...]] = lambda: ()
+    hardware_ids: Sequence[str] | None = None  # e.g. "XM430-W350 id 13"
 
 
 class RobotDiagnostics:
@@ -102,9 +105,12 @@ class RobotDiagnostics:
         return [control_status(stats.snapshot(), self._tick_age(), rate, self.realtime, self.limits)]
 
     def _servos(self) -> list[DiagnosticStatus]:
-        return servo_statuses(self.readings.joint_names, self.readings.servos(), self.limits)
+        r = self.readings
+        return servo_statuses(r.joint_names, r.servos(), self.limits, r.hardware_ids, r.lost_servos())
 
     def _power(self) -> list[DiagnosticStatus]:
+        if self.readings.battery_cells == 0:  # no battery monitoring on this robot
+            return []
         return [power_status(self.readings.power(), self.readings.battery_cells, self.limits)]
 
     def _sensors(self) -> list[DiagnosticStatus]:
@@ -112,7 +118,7 @@ class RobotDiagnostics:
         sim_time = r.sim_time()
         stamp = r.imu_stamp()
         feed = r.sensor_feed()
-        return sensor_statuses(
+        statuses = sensor_statuses(
             r.perception(),
             sim_time,
             feed.camera.sim_time_s if feed.camera else None,
@@ -121,6 +127,7 @@ class RobotDiagnostics:
             r.sensor_hz,
             self.limits,
         )
+        return statuses if r.has_imu else [s for s in statuses if s.name != "sensors/imu"]
 
     def _links(self) -> list[DiagnosticStatus]:
         out = [

@@ -11,7 +11,9 @@ the bytes would take on the wire at the bus's baud rate.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
+import multiprocessing as mp
 import os
 import select
 import threading
@@ -19,6 +21,8 @@ import time
 import tty
 from collections.abc import Iterable
 from dataclasses import dataclass
+from multiprocessing.connection import Connection
+from typing import Any
 
 from robot.hardware import control_table as ct
 from robot.hardware.protocol2 import ALERT_BIT, BROADCAST_ID, Instruction, Packet, PacketParser, StatusError, status
@@ -28,6 +32,7 @@ NO_LOAD_SPEED_RAD_S = 46.0 * 2 * math.pi / 60  # 46 rpm at 12 V
 STALL_TORQUE_NM = 4.1
 RESISTANCE_OHM = 12.0 / 2.3
 THERMAL_K_PER_W, THERMAL_TAU_S = 6.0, 360.0
+EMULATOR_FIFO_PRIORITY = 50  # above the robot worker's own threads (40), as hardware is
 
 
 @dataclass
@@ -158,11 +163,11 @@ class BusStats:
     busy_s: float = 0.0  # wire time of everything sent both ways, at the bus's baud rate
 
 
-class BusEmulator:
-    """Servos on a pseudo-terminal. Use as a context manager; `port_name` is what the SDK opens."""
+class EmulatedBus:
+    """Servos on a pseudo-terminal, served by a thread (in `BusEmulator`'s own process)."""
 
     def __init__(self, servos: Iterable[EmulatedXM430], baudrate: int = 1_000_000, wire_time: bool = False,
-                 motor_hz: float = 500.0) -> None:  # fmt: skip
+                 motor_hz: float = 200.0) -> None:  # fmt: skip
         self.servos = {s.servo_id: s for s in servos}
         self.baudrate = baudrate
         self.wire_time = wire_time
@@ -176,13 +181,6 @@ class BusEmulator:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
 
-    def __enter__(self) -> BusEmulator:
-        self.start()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.stop()
-
     def start(self) -> None:
         self._thread = threading.Thread(target=self._run, name="dynamixel-emulator", daemon=True)
         self._thread.start()
@@ -195,13 +193,27 @@ class BusEmulator:
             with contextlib.suppress(OSError):
                 os.close(fd)
 
-    def servo(self, servo_id: int) -> EmulatedXM430:
-        return self.servos[servo_id]
-
-    @property
-    def lock(self) -> threading.RLock:
-        """Hold it to change servos (loads, faults) consistently with the bus thread."""
-        return self._lock
+    def control(self, request: tuple) -> Any:
+        """A test's request, answered under the bus's lock: ("fault", id, name, value), ("temperature", id, C),
+        ("load", id, Nm), ("field", id, address, size), ("position", id), ("stats",)."""
+        kind, *args = request
+        with self._lock:
+            if kind == "stats":
+                return dataclasses.replace(self.stats)
+            servo = self.servos[args[0]]
+            if kind == "fault":
+                setattr(servo.faults, args[1], args[2])
+            elif kind == "temperature":
+                servo.temperature_c = float(args[1])
+            elif kind == "load":
+                servo.load_nm = float(args[1])
+            elif kind == "field":
+                return ct.Field(args[1], args[2]).decode(bytes(servo.table[args[1] : args[1] + args[2]]))
+            elif kind == "position":
+                return servo.position_rad
+            else:
+                raise ValueError(f"unknown request {kind!r}")
+        return None
 
     # the bus ---------------------------------------------------------------------------------------------------
 
@@ -299,3 +311,111 @@ class BusEmulator:
             target.reboot()
             return self._reply(target, StatusError.NONE)
         return self._reply(target, StatusError.INSTRUCTION)
+
+
+class BusEmulator:
+    """The emulated bus in its own process, as a real U2D2 and its servos are: nothing the test or the backend does
+    in its interpreter can delay a reply (in one process, the SDK's busy-waiting read held the interpreter lock
+    past its 4 ms timeout). Use as a context manager; `port_name` is the pseudo-terminal the SDK opens."""
+
+    def __init__(self, servo_ids: Iterable[int], baudrate: int = 1_000_000, wire_time: bool = False,
+                 positions: dict[int, float] | None = None) -> None:  # fmt: skip
+        """`positions`: servo angles (rad from the centre) where servos start, by ID (0 for the others)."""
+        self.servo_ids = tuple(servo_ids)
+        self.positions = dict(positions or {})
+        self.baudrate = baudrate
+        self.wire_time = wire_time
+        self.port_name = ""
+        self._conn: Connection | None = None
+        self._process: mp.process.BaseProcess | None = None
+        self._lock = threading.Lock()
+
+    def __enter__(self) -> BusEmulator:
+        self.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    def start(self) -> None:
+        context = mp.get_context("spawn")
+        parent, child = context.Pipe()
+        args = (child, self.servo_ids, self.baudrate, self.wire_time, self.positions)
+        self._process = context.Process(target=_serve, args=args, name="dynamixel-emulator", daemon=True)
+        self._process.start()
+        child.close()
+        self._conn = parent
+        if not parent.poll(30):
+            self._process.kill()
+            raise RuntimeError("the bus emulator did not start")
+        self.port_name = parent.recv()
+
+    def stop(self) -> None:
+        if self._conn is not None:
+            with contextlib.suppress(OSError, EOFError):
+                self._call("stop")
+            self._conn.close()
+            self._conn = None
+        if self._process is not None:
+            self._process.join(timeout=5)
+            if self._process.is_alive():
+                self._process.kill()
+            self._process = None
+
+    def _call(self, *request: Any) -> Any:
+        assert self._conn is not None, "start() first"
+        with self._lock:
+            self._conn.send(request)
+            ok, value = self._conn.recv()
+        if not ok:
+            raise RuntimeError(value)
+        return value
+
+    # what tests do to the servos ---------------------------------------------------------------------------------
+
+    def set_fault(self, servo_id: int, **faults: Any) -> None:
+        """dead=True, drop_replies=n, corrupt_replies=n (see ServoFaults)."""
+        for name, value in faults.items():
+            self._call("fault", servo_id, name, value)
+
+    def set_temperature(self, servo_id: int, celsius: float) -> None:
+        self._call("temperature", servo_id, celsius)
+
+    def set_load(self, servo_id: int, torque_nm: float) -> None:
+        self._call("load", servo_id, torque_nm)
+
+    def read(self, servo_id: int, field: ct.Field) -> int:
+        """A control-table field as the servo holds it now (signedness as the field's)."""
+        raw = self._call("field", servo_id, field.address, field.size)
+        return field.decode(int(raw).to_bytes(field.size, "little")) if field.signed else raw
+
+    def position_rad(self, servo_id: int) -> float:
+        return self._call("position", servo_id)
+
+    def stats(self) -> BusStats:
+        return self._call("stats")
+
+
+def _serve(conn: Connection, servo_ids: tuple[int, ...], baudrate: int, wire_time: bool,
+           positions: dict[int, float]) -> None:  # fmt: skip
+    # Real servos answer whatever the host is doing: where it may (root, or CAP_SYS_NICE), the emulator runs
+    # ahead of ordinary processes. It sleeps in select() between packets, so it takes nothing from them.
+    with contextlib.suppress(OSError, AttributeError):
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(EMULATOR_FIFO_PRIORITY))
+    bus = EmulatedBus([EmulatedXM430(i, positions.get(i, 0.0)) for i in servo_ids], baudrate, wire_time)
+    bus.start()
+    conn.send(bus.port_name)
+    try:
+        while True:
+            request = conn.recv()
+            if request[0] == "stop":
+                conn.send((True, None))
+                break
+            try:
+                conn.send((True, bus.control(request)))
+            except Exception as exc:  # a test's mistake: said, not a dead emulator
+                conn.send((False, repr(exc)))
+    except EOFError:
+        pass
+    finally:
+        bus.stop()

@@ -178,6 +178,13 @@ class MujocoSimBackend:
     def qpos(self) -> np.ndarray:
         return self.data.qpos.copy()
 
+    def qpos_with_joints(self, joint_positions: np.ndarray) -> np.ndarray:
+        """The scene's qpos as it stands, with the robot's joints at `joint_positions` (what a viewer needs to draw
+        a real robot's measured pose in this model)."""
+        qpos = self.data.qpos.copy()
+        qpos[self._joint_qpos] = joint_positions
+        return qpos
+
     def mocap_positions(self) -> np.ndarray:
         """(n, 3) positions of the kinematic bodies (the spare obstacles): part of the scene beside qpos."""
         return self.data.mocap_pos.copy()

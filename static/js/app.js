@@ -174,6 +174,7 @@ function renderState(s) {
   $("latched-banner").hidden = !latched;
   $("release").hidden = !latched;
   $("estop").classList.toggle("latched", latched);
+  if (humanoid.renderTorque) humanoid.renderTorque(s.torque_enabled);
   $("st-mode").textContent = s.mode + (s.fallen ? " (fallen)" : "");
   $("st-pose").textContent = `x ${fmt(s.pose.x)} m, y ${fmt(s.pose.y)} m, z ${fmt(s.pose.z)} m, yaw ${fmt(s.pose.yaw_rad * 180 / Math.PI, 0)}°`;
   $("st-tilt").textContent = `${fmt(s.tilt_deg, 1)}°`;

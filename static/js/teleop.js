@@ -117,6 +117,17 @@
   $("stand").addEventListener("click", () => action("/api/posture", { posture: "stand" }));
   $("crouch").addEventListener("click", () => action("/api/posture", { posture: "crouch" }));
   $("reset").addEventListener("click", () => action("/api/reset"));
+  // the real robot's servos: off at start-up until the operator turns them on (hidden in simulation)
+  $("torque").addEventListener("click", () => {
+    const on = window.humanoid.state && window.humanoid.state.torque_enabled;
+    action("/api/torque", { enabled: !on });
+  });
+  window.humanoid.renderTorque = (enabled) => {
+    const button = $("torque");
+    button.hidden = enabled === null || enabled === undefined;
+    button.textContent = enabled ? "Torque off" : "Torque on";
+    button.classList.toggle("primary", !enabled);
+  };
 
   // refusals come back on the socket (e.g. a plan is running, e-stop latched)
   window.humanoid.onTeleopAck = (m) => {

@@ -56,7 +56,10 @@ def test_a_session_records_motion_at_30_hz_of_simulated_time_and_what_happened(r
     times = [i["sim_time_s"] for i in detail["timeline"]]
     # in time order (to the centisecond: a command comes before the plan made of it at the same moment)
     assert all(b >= a - 0.01 for a, b in itertools.pairwise(times))
-    assert all(sim[0] - 1 <= t <= sim[-1] + 1 for t in times)
+    # (diagnostics alarms come from a wall-clock monitor, e.g. a loaded machine's CPU: they may land after the
+    # last telemetry sample of a headless run, whose simulated time runs several times faster than the wall's)
+    recorded_times = [i["sim_time_s"] for i in detail["timeline"] if i["type"] != "alarm"]
+    assert all(sim[0] - 1 <= t <= sim[-1] + 1 for t in recorded_times)
     with factory() as db:
         series = telemetry_series(db, sid, ["battery_v", "com"], max_points=20)
     assert len(series["sim_time_s"]) <= 20 and len(series["com"]) == 3

@@ -17,7 +17,7 @@ from dynamixel_sdk import (
 )
 
 from robot.hardware import control_table as ct
-from robot.hardware.bus_emulator import BusEmulator, EmulatedXM430
+from robot.hardware.bus_emulator import BusEmulator
 from robot.hardware.protocol2 import ALERT_BIT, PacketParser, crc16, encode, stuff, unstuff
 from robot.hardware.xm430 import HardwareError
 
@@ -38,8 +38,8 @@ def test_crc_and_stuffing_follow_the_specification() -> None:
 
 @pytest.fixture
 def bus() -> Iterator[tuple[BusEmulator, PortHandler, PacketHandler]]:
-    with BusEmulator([EmulatedXM430(i) for i in IDS]) as emulator:
-        port = PortHandler(emulator.port_name)
+    with BusEmulator(IDS) as emulator:
+        port = PortHandler(emulator.port_name)  # the SDK's own port: a 34 ms reply timeout
         assert port.openPort() and port.setBaudRate(1_000_000)
         yield emulator, port, PacketHandler(2.0)
         port.closePort()
@@ -90,10 +90,9 @@ def test_eeprom_is_locked_while_torque_is_on_and_limits_are_enforced(bus) -> Non
 
 def test_faults_a_dead_servo_timeouts_crc_errors_and_overheating(bus) -> None:
     emulator, port, packets = bus
-    with emulator.lock:
-        emulator.servo(4).faults.dead = True
-        emulator.servo(5).faults.drop_replies = 1
-        emulator.servo(6).faults.corrupt_replies = 1
+    emulator.set_fault(4, dead=True)
+    emulator.set_fault(5, drop_replies=1)
+    emulator.set_fault(6, corrupt_replies=1)
     assert packets.ping(port, 4)[1] == COMM_RX_TIMEOUT
     assert packets.read4ByteTxRx(port, 5, ct.PRESENT_POSITION.address)[1] == COMM_RX_TIMEOUT
     assert packets.read4ByteTxRx(port, 5, ct.PRESENT_POSITION.address)[1] == COMM_SUCCESS  # only the one dropped
@@ -106,14 +105,12 @@ def test_faults_a_dead_servo_timeouts_crc_errors_and_overheating(bus) -> None:
     assert len(reader.data_dict[3]) == 4 and not reader.data_dict[4]
 
     packets.write1ByteTxRx(port, 7, ct.TORQUE_ENABLE.address, 1)
-    with emulator.lock:
-        emulator.servo(7).temperature_c = 85.0
+    emulator.set_temperature(7, 85.0)
     time.sleep(0.05)
     value, result, error = packets.read1ByteTxRx(port, 7, ct.HARDWARE_ERROR_STATUS.address)
     assert result == COMM_SUCCESS and error & ALERT_BIT and HardwareError(value) == HardwareError.OVERHEATING
     assert packets.read1ByteTxRx(port, 7, ct.TORQUE_ENABLE.address)[0] == 0  # it cut its own torque
     assert packets.write1ByteTxRx(port, 7, ct.TORQUE_ENABLE.address, 1)[1] == ALERT_BIT | 1  # refused: latched
-    with emulator.lock:
-        emulator.servo(7).temperature_c = 40.0
+    emulator.set_temperature(7, 40.0)
     assert packets.reboot(port, 7)[0] == COMM_SUCCESS
     assert packets.read1ByteTxRx(port, 7, ct.HARDWARE_ERROR_STATUS.address)[:2] == (0, COMM_SUCCESS)

@@ -1,0 +1,104 @@
+"""`humanoid bench dynamixel`: the real-robot backend's bus loop against the Protocol 2.0 emulator, which takes the
+time the bytes would take on the wire at each baud rate (24 XM430s, the emulator in its own process).
+
+Per baud rate (1 and 4 Mbps by default):
+- flat out: ticks per second of a tick as the backend does it (sync write of the goals, sync read of current,
+  velocity and position, the slow blocks in turn), and the tick time p50/p99;
+- at the control rate (100 Hz): the share of each period the bus was busy, measured by the emulator (bytes both
+  ways at the baud rate), next to the budget the backend computes at start-up;
+- a servo that stops answering: ticks until it is declared lost.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from typing import Any
+
+import numpy as np
+
+TARGETS = {"loop_hz": 100.0}
+
+
+def _stats(values: list[float]) -> dict[str, float]:
+    data = np.asarray(values, dtype=float)
+    return {
+        "p50": round(float(np.percentile(data, 50)), 3),
+        "p99": round(float(np.percentile(data, 99)), 3),
+        "max": round(float(data.max()), 3),
+    }
+
+
+def _one_rate(baudrate: int, seconds: float) -> dict[str, Any]:
+    from robot.hardware.bus import DynamixelBus
+    from robot.hardware.bus_emulator import BusEmulator
+    from robot.hardware.config import default_config
+
+    config = dataclasses.replace(default_config(baudrate=baudrate), reply_margin_ms=20.0)
+    with BusEmulator([j.servo_id for j in config.joints], baudrate=baudrate, wire_time=True) as emulator:
+        bus = DynamixelBus(dataclasses.replace(config, port=emulator.port_name))
+        bus.open()
+        try:
+            bus.set_torque(True)
+            goals = np.zeros(len(config.joints))
+            ticks: list[float] = []
+            started = time.perf_counter()
+            while time.perf_counter() - started < seconds:
+                t0 = time.perf_counter()
+                bus.write_goals(goals)
+                bus.read()
+                ticks.append((time.perf_counter() - t0) * 1e3)
+            flat_hz = len(ticks) / (time.perf_counter() - started)
+            busy0, wall0 = emulator.stats().busy_s, time.perf_counter()
+            period = 1.0 / config.control_hz
+            next_tick = time.perf_counter()
+            paced = 0
+            while time.perf_counter() - wall0 < seconds:
+                next_tick += period
+                bus.write_goals(goals)
+                bus.read()
+                paced += 1
+                time.sleep(max(0.0, next_tick - time.perf_counter()))
+            busy = (emulator.stats().busy_s - busy0) / (time.perf_counter() - wall0)
+            paced_hz = paced / (time.perf_counter() - wall0)
+            emulator.set_fault(13, dead=True)
+            lost_after = 0
+            while "r_knee" not in bus.read().lost:
+                lost_after += 1
+            budget = bus.budget()
+            return {
+                "baudrate": baudrate,
+                "servos": len(config.joints),
+                "flat_out_hz": round(flat_hz, 1),
+                "tick_ms": _stats(ticks),
+                "paced_hz": round(paced_hz, 1),
+                "bus_busy_measured": round(busy, 3),
+                "bus_budget": {
+                    "bytes_per_tick": budget.bytes_per_tick,
+                    "wire_ms": round(budget.wire_ms_per_tick, 3),
+                    "utilisation": round(budget.utilisation, 3),
+                    "fits": budget.fits,
+                },
+                "dead_servo_lost_after_ticks": lost_after + 1,
+                "met": flat_hz >= TARGETS["loop_hz"],
+            }
+        finally:
+            bus.close()
+
+
+def run_dynamixel(seconds: float = 10.0, baudrates: tuple[int, ...] = (1_000_000, 4_000_000)) -> dict[str, Any]:
+    started = time.perf_counter()
+    rates = [_one_rate(b, seconds) for b in baudrates]
+    return {
+        "suite": "dynamixel",
+        "seconds_per_phase": seconds,
+        "rates": rates,
+        "bars": {
+            "loop_hz": {
+                "target": TARGETS["loop_hz"],
+                "measured": {r["baudrate"]: r["flat_out_hz"] for r in rates},
+                "met": all(r["met"] for r in rates),
+            }
+        },
+        "wall_s": round(time.perf_counter() - started, 1),
+    }

@@ -1,0 +1,284 @@
+"""The servo bus (as LeRobot's MotorsBus): the XM430s of a `HardwareConfig` behind one U2D2, through the real
+`dynamixel-sdk`. Each control tick is one sync write of the goal positions and one sync read of current, velocity
+and position; hardware errors, voltage and temperature are read in turn at a tenth of the rate. A servo that does
+not answer three reads in a row is declared lost (and left out of the reads, so the others keep coming).
+
+Joint values are in the model's units (rad; m for a gripper's finger); the bus converts through each joint's
+direction, offset and scale, and clamps every goal to the joint's limits before it is written.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from dynamixel_sdk import COMM_RX_CORRUPT, COMM_SUCCESS, GroupSyncRead, GroupSyncWrite, PacketHandler, PortHandler
+
+from robot.hardware import control_table as ct
+from robot.hardware.config import HardwareConfig
+from robot.hardware.xm430 import HardwareError
+
+log = logging.getLogger(__name__)
+
+LOST_AFTER_FAILED_READS = 3
+PING_ATTEMPTS = 3
+FAST = (ct.PRESENT_CURRENT.address, 10)  # current (2), velocity (4), position (4): every tick
+SLOW_ERRORS = (ct.HARDWARE_ERROR_STATUS.address, 1)
+SLOW_POWER = (ct.PRESENT_INPUT_VOLTAGE.address, 3)  # voltage (2), temperature (1)
+SLOW_EVERY = 10  # ticks between two reads of each slow block
+STATUS_OVERHEAD_BYTES = 11  # header, ID, length, instruction, error, CRC of a status packet
+INSTRUCTION_OVERHEAD_BYTES = 10  # header, ID, length, instruction, CRC
+SYNC_PARAMS_BYTES = 4  # start address and data length
+
+
+class BusError(RuntimeError):
+    pass
+
+
+class LowLatencyPortHandler(PortHandler):
+    """The SDK's port with the packet timeout computed for the U2D2's latency timer as set (1 ms with the udev rule
+    the README gives; the SDK assumes the FTDI default of 16 ms, which makes every missing reply cost 34 ms)."""
+
+    def __init__(self, port_name: str, latency_timer_ms: float = 1.0, reply_margin_ms: float = 2.0) -> None:
+        super().__init__(port_name)
+        self.latency_timer_ms = latency_timer_ms
+        self.reply_margin_ms = reply_margin_ms
+
+    def setPacketTimeout(self, packet_length: int) -> None:  # the SDK names it
+        self.packet_start_time = self.getCurrentTime()
+        self.packet_timeout = self.tx_time_per_byte * packet_length + self.latency_timer_ms * 2.0 + self.reply_margin_ms
+
+
+@dataclass(frozen=True)
+class ServoInfo:
+    joint: str
+    servo_id: int
+    model: int | None  # None: it did not answer
+    firmware: int | None = None
+    hardware_error: int = 0
+
+
+@dataclass(frozen=True)
+class BusBudget:
+    """Bytes on the wire per control tick and the share of the tick they take at the configured baud rate."""
+
+    bytes_per_tick: float
+    wire_ms_per_tick: float
+    latency_ms_per_tick: float
+    utilisation: float  # (wire + latency) / tick period
+
+    @property
+    def fits(self) -> bool:
+        return self.utilisation <= 0.8
+
+
+def tick_budget(servos: int, baudrate: int, control_hz: float, latency_timer_ms: float) -> BusBudget:
+    """What one tick costs: a sync write of 4-byte goals, a sync read of the fast block (a status packet from each
+    servo), and the slow blocks' share; each transaction waits out the USB latency once."""
+    write = INSTRUCTION_OVERHEAD_BYTES + SYNC_PARAMS_BYTES + servos * 5
+    read = INSTRUCTION_OVERHEAD_BYTES + SYNC_PARAMS_BYTES + servos + servos * (STATUS_OVERHEAD_BYTES + FAST[1])
+    slow = sum(INSTRUCTION_OVERHEAD_BYTES + SYNC_PARAMS_BYTES + servos + servos * (STATUS_OVERHEAD_BYTES + n)
+               for _, n in (SLOW_ERRORS, SLOW_POWER)) / SLOW_EVERY  # fmt: skip
+    total = write + read + slow
+    wire_ms = total * 10 / baudrate * 1e3
+    latency_ms = latency_timer_ms * (1 + 2 / SLOW_EVERY)  # the read (and the slow reads) wait for the USB frame
+    return BusBudget(total, wire_ms, latency_ms, (wire_ms + latency_ms) / (1e3 / control_hz))
+
+
+@dataclass
+class BusReading:
+    """One tick's read: joint positions and velocities in joint units, servo current; NaN where a servo is lost."""
+
+    positions: np.ndarray
+    velocities: np.ndarray
+    currents_a: np.ndarray
+    voltages_v: np.ndarray
+    temperatures_c: np.ndarray
+    hardware_errors: np.ndarray
+    lost: tuple[str, ...] = ()  # joints whose servo stopped answering
+    failed_reads: int = 0
+    read_ms: float = 0.0
+    write_ms: float = 0.0
+
+
+@dataclass
+class _ServoHealth:
+    failures: int = 0
+    lost: bool = False
+
+
+@dataclass
+class BusCounters:
+    ticks: int = 0
+    failed_reads: int = 0
+    crc_errors: int = 0
+    timeouts: int = 0
+    read_ms: list[float] = field(default_factory=list)
+
+
+class DynamixelBus:
+    def __init__(self, config: HardwareConfig, port: PortHandler | None = None) -> None:
+        self.config = config
+        self.joints = config.joints
+        self.port = port or LowLatencyPortHandler(config.port, config.latency_timer_ms, config.reply_margin_ms)
+        self.packets = PacketHandler(2.0)
+        self._health = {j.servo_id: _ServoHealth() for j in self.joints}
+        self._index = {j.servo_id: i for i, j in enumerate(self.joints)}
+        n = len(self.joints)
+        self._last = BusReading(np.zeros(n), np.zeros(n), np.zeros(n), np.full(n, np.nan), np.full(n, np.nan),
+                                np.zeros(n, dtype=np.int64))  # fmt: skip
+        self._tick = 0
+        self.counters = BusCounters()
+        self._fast: GroupSyncRead | None = None
+        self._is_open = False
+
+    # lifecycle ---------------------------------------------------------------------------------------------------
+
+    def open(self) -> None:
+        if not self.port.openPort():
+            raise BusError(f"cannot open {self.config.port}")
+        if not self.port.setBaudRate(self.config.baudrate):
+            raise BusError(f"{self.config.port} does not take {self.config.baudrate} baud")
+        self._is_open = True
+        self._fast = self._reader(*FAST)
+
+    def close(self) -> None:
+        if self._is_open:
+            self.port.closePort()
+            self._is_open = False
+
+    def budget(self) -> BusBudget:
+        c = self.config
+        return tick_budget(len(self.joints), c.baudrate, c.control_hz, c.latency_timer_ms)
+
+    def ping_all(self) -> list[ServoInfo]:
+        """Every configured servo: its model and firmware, and its latched hardware error; model None if silent."""
+        out = []
+        for j in self.joints:
+            for _ in range(PING_ATTEMPTS):  # one lost reply is a glitch, not a missing servo
+                model, result, _ = self.packets.ping(self.port, j.servo_id)
+                if result == COMM_SUCCESS:
+                    break
+            if result != COMM_SUCCESS:
+                out.append(ServoInfo(j.joint, j.servo_id, None))
+                continue
+            firmware, _, _ = self.packets.read1ByteTxRx(self.port, j.servo_id, ct.FIRMWARE_VERSION.address)
+            errors, _, _ = self.packets.read1ByteTxRx(self.port, j.servo_id, ct.HARDWARE_ERROR_STATUS.address)
+            out.append(ServoInfo(j.joint, j.servo_id, model, firmware, errors))
+        return out
+
+    # per tick ------------------------------------------------------------------------------------------------
+
+    def set_torque(self, enabled: bool) -> None:
+        """Torque on or off for every servo that answers (one sync write, then checked)."""
+        writer = GroupSyncWrite(self.port, self.packets, ct.TORQUE_ENABLE.address, 1)
+        for j in self.joints:
+            writer.addParam(j.servo_id, [int(enabled)])
+        result = writer.txPacket()
+        if result != COMM_SUCCESS:
+            raise BusError(f"torque {'on' if enabled else 'off'}: {self.packets.getTxRxResult(result)}")
+
+    def torque_states(self) -> dict[str, bool | None]:
+        out: dict[str, bool | None] = {}
+        for j in self.joints:
+            value, result, _ = self.packets.read1ByteTxRx(self.port, j.servo_id, ct.TORQUE_ENABLE.address)
+            out[j.joint] = bool(value) if result == COMM_SUCCESS else None
+        return out
+
+    def write_goals(self, targets: np.ndarray) -> float:
+        """Each target clamped to its joint's limits, converted to servo ticks, all in one sync write (ms taken)."""
+        started = time.perf_counter()
+        writer = GroupSyncWrite(self.port, self.packets, ct.GOAL_POSITION.address, 4)
+        for j, value in zip(self.joints, targets, strict=True):
+            if self._health[j.servo_id].lost or not np.isfinite(value):
+                continue
+            writer.addParam(j.servo_id, list(ct.GOAL_POSITION.encode(j.to_ticks(j.clamp(float(value))))))
+        result = writer.txPacket()
+        if result != COMM_SUCCESS:
+            raise BusError(f"goal positions: {self.packets.getTxRxResult(result)}")
+        return (time.perf_counter() - started) * 1e3
+
+    def read(self) -> BusReading:
+        """This tick's reading (the last good values stand in for a servo that did not answer this time)."""
+        started = time.perf_counter()
+        self._tick += 1
+        failed = self._read_block(self._fast, FAST)
+        if self._tick % SLOW_EVERY == 3:
+            failed += self._read_block(self._reader(*SLOW_ERRORS), SLOW_ERRORS)
+        elif self._tick % SLOW_EVERY == 7:
+            failed += self._read_block(self._reader(*SLOW_POWER), SLOW_POWER)
+        self.counters.ticks += 1
+        self.counters.failed_reads += failed
+        reading = self._last
+        reading.lost = tuple(j.joint for j in self.joints if self._health[j.servo_id].lost)
+        reading.failed_reads = failed
+        reading.read_ms = (time.perf_counter() - started) * 1e3
+        return BusReading(**{k: (v.copy() if isinstance(v, np.ndarray) else v) for k, v in reading.__dict__.items()})
+
+    def reboot(self, joint: str) -> bool:
+        """Reboot one servo (clears a latched hardware error; its torque comes back off). It is read again."""
+        j = next(j for j in self.joints if j.joint == joint)
+        result, _ = self.packets.reboot(self.port, j.servo_id)
+        if result == COMM_SUCCESS:
+            self._health[j.servo_id] = _ServoHealth()
+            self._fast = self._reader(*FAST)
+        return result == COMM_SUCCESS
+
+    # internals -----------------------------------------------------------------------------------------------
+
+    def _reader(self, address: int, length: int) -> GroupSyncRead:
+        reader = GroupSyncRead(self.port, self.packets, address, length)
+        for j in self.joints:
+            if not self._health[j.servo_id].lost:
+                reader.addParam(j.servo_id)
+        return reader
+
+    def _read_block(self, reader: GroupSyncRead, block: tuple[int, int]) -> int:
+        """Sync read; the SDK stops at the first servo that does not answer, so that one is charged a failure and
+        the ones after it keep their last values this tick. Returns the number of failed servos."""
+        address, length = block
+        ids = list(reader.data_dict)
+        if not ids:
+            return 0
+        result = reader.txRxPacket()
+        answered = [i for i in ids if len(reader.data_dict.get(i) or []) == length]
+        for servo_id in answered:
+            self._health[servo_id].failures = 0
+            self._store(servo_id, address, bytes(reader.data_dict[servo_id]))
+        if result == COMM_SUCCESS:
+            return 0
+        if result == COMM_RX_CORRUPT:
+            self.counters.crc_errors += 1
+        else:
+            self.counters.timeouts += 1
+        culprit = next((i for i in ids if i not in answered), None)
+        if culprit is None:
+            return 0
+        health = self._health[culprit]
+        health.failures += 1
+        if health.failures >= LOST_AFTER_FAILED_READS and not health.lost:
+            health.lost = True
+            joint = self.joints[self._index[culprit]].joint
+            log.error("servo %d (%s) stopped answering", culprit, joint)
+            self._fast = self._reader(*FAST)
+        return 1
+
+    def _store(self, servo_id: int, address: int, data: bytes) -> None:
+        i = self._index[servo_id]
+        j = self.joints[i]
+        last = self._last
+
+        def field(f: ct.Field) -> int:
+            return f.decode(data[f.address - address : f.address - address + f.size])
+
+        if address == FAST[0]:
+            last.currents_a[i] = abs(field(ct.PRESENT_CURRENT)) * ct.CURRENT_UNIT_A
+            last.velocities[i] = field(ct.PRESENT_VELOCITY) * ct.VELOCITY_UNIT_RAD_S / (j.direction * j.scale)
+            last.positions[i] = j.from_ticks(field(ct.PRESENT_POSITION))
+        elif address == SLOW_ERRORS[0]:
+            last.hardware_errors[i] = int(HardwareError(field(ct.HARDWARE_ERROR_STATUS)))
+        elif address == SLOW_POWER[0]:
+            last.voltages_v[i] = field(ct.PRESENT_INPUT_VOLTAGE) / 10.0
+            last.temperatures_c[i] = field(ct.PRESENT_TEMPERATURE)

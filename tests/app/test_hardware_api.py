@@ -1,0 +1,50 @@
+"""The web app serving the real-robot backend (the servos emulated on a pseudo-terminal): torque from the API,
+motion commands the bus cannot serve refused with the reason, servo diagnostics with their bus IDs, sessions."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Iterator
+
+import pytest
+from fastapi.testclient import TestClient
+
+from app.main import create_app
+from app.runtime import Runtime
+from robot.hardware import control_table as ct
+from robot.hardware.bus_emulator import BusEmulator
+from robot.hardware.config import default_config
+from robot.hardware.worker import HardwareWorker
+from tests.app.test_api import wait_until
+
+CONFIG = dataclasses.replace(default_config(), reply_margin_ms=100.0)
+
+
+@pytest.fixture
+def hardware_client(settings, layout) -> Iterator[tuple[TestClient, BusEmulator]]:
+    with BusEmulator([j.servo_id for j in CONFIG.joints]) as emulator:
+        worker = HardwareWorker(dataclasses.replace(CONFIG, port=emulator.port_name), layout)
+        runtime = Runtime.start(settings.model_copy(update={"backend": "dynamixel"}), worker=worker)
+        with TestClient(create_app(settings, runtime=runtime)) as client:
+            yield client, emulator
+        runtime.stop()
+
+
+def test_the_page_drives_the_real_robots_torque_and_is_told_what_it_cannot_do(hardware_client) -> None:
+    client, emulator = hardware_client
+    assert client.get("/api/state").json()["torque_enabled"] is False
+    assert client.post("/api/posture", json={"posture": "stand"}).status_code == 409  # torque is off
+    assert client.post("/api/torque", json={"enabled": True}).status_code == 200
+    wait_until(lambda: client.get("/api/state").json()["torque_enabled"])
+    assert all(emulator.read(j.servo_id, ct.TORQUE_ENABLE) for j in CONFIG.joints)
+    refused = client.post("/api/teleop", json={"vx": 0.1, "vy": 0.0, "yaw_rate": 0.0})
+    assert refused.status_code == 501 and "IMU" in refused.json()["detail"]["message"]
+    assert client.post("/api/sim/faults", json={"fault": "imu_lost"}).status_code == 501
+    knee = wait_until(lambda: (d := client.get("/api/diagnostics").json())["groups"].get("servos") and d)
+    ids = {s["name"]: s["hardware_id"] for s in knee["groups"]["servos"]["statuses"]}
+    assert ids["servos/r_knee"] == "XM430-W350 id 13" and len(ids) == 24
+    assert "power" not in knee["groups"] and "sensors/imu" not in str(knee)
+    assert client.post("/api/estop").status_code == 200
+    wait_until(lambda: not client.get("/api/state").json()["torque_enabled"], timeout=8)  # crouched, then off
+    session = client.get("/api/sessions").json()["items"][0]
+    assert session["backend"] == "dynamixel"
