@@ -44,7 +44,7 @@ def test_run_prints_the_result_and_records_a_session(tmp_path) -> None:
     assert "found red mug at" in second["steps"][1]["detail"]
     assert "holding the red mug" in second["steps"][2]["detail"]
     assert second["steps"][3]["action"] == "say"
-    assert second["wall_time_s"] < second["sim_time_s"]  # headless runs faster than real time
+    assert second["wall_time_s"] > 0  # how fast it ran is `humanoid bench capstone`'s to measure, not a test's
 
 
 @pytest.mark.slow
