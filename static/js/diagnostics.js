@@ -8,7 +8,6 @@
   const LEVELS = ["OK", "WARN", "ERROR", "STALE"];
   const HISTORY = 300; // samples (5 minutes at 1 Hz)
   const series = { cpu: [], tick: [], servo: [], battery: [] };
-  const open = new Set(); // groups the operator expanded stay expanded across updates
 
   const value = (d, name, key) => {
     for (const g of Object.values(d.groups)) {
@@ -50,9 +49,13 @@
   const esc = (t) => String(t).replace(/[&<>"]/g, (c) => ({ "&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;" })[c]);
   const fmt = (v) => (typeof v === "number" ? (Number.isInteger(v) ? v : v.toFixed(Math.abs(v) < 10 ? 3 : 1)) : v);
 
+  let bannerKey = "";
   function renderBanner(d) {
     const banner = $("alarm-banner");
     const alarms = d.alarms;
+    const key = alarms.map((a) => `${a.level}|${a.name}|${a.message}`).join("\n");
+    if (key === bannerKey) return; // unchanged: no DOM work (a software-rendered page repaints what it touches)
+    bannerKey = key;
     if (!alarms.length) { banner.hidden = true; return; }
     banner.hidden = false;
     banner.classList.toggle("banner-error", alarms.some((a) => a.level === 2));
@@ -62,19 +65,36 @@
       (alarms.length > 6 ? `<li>… and ${alarms.length - 6} more (see Diagnostics)</li>` : "") + "</ul>";
   }
 
+  // Each group is a <details>: its summary (level, counts) always, its table of statuses only while it is open,
+  // so a closed panel costs almost nothing a second.
+  function groupRows(g) {
+    return g.statuses.map((s) => {
+      const kv = Object.entries(s.values).map(([k, v]) => `${esc(k)}=${esc(fmt(v))}`).join(" · ");
+      return `<tr class="lvl-${s.level}" data-name="${esc(s.name)}"><td>${pill(s.level)}</td><td>${esc(s.name.split("/").slice(1).join("/"))}</td>` +
+        `<td>${esc(s.message)}<br><span class="muted">${kv}</span></td></tr>`;
+    }).join("");
+  }
+
   function renderGroups(d) {
     const box = $("diag-groups");
-    box.querySelectorAll("details").forEach((el) => (el.open ? open.add(el.dataset.group) : open.delete(el.dataset.group)));
-    box.innerHTML = Object.entries(d.groups).map(([name, g]) => {
-      const rows = g.statuses.map((s) => {
-        const kv = Object.entries(s.values).map(([k, v]) => `${esc(k)}=${esc(fmt(v))}`).join(" · ");
-        return `<tr class="lvl-${s.level}" data-name="${esc(s.name)}"><td>${pill(s.level)}</td><td>${esc(s.name.split("/").slice(1).join("/"))}</td>` +
-          `<td>${esc(s.message)}<br><span class="muted">${kv}</span></td></tr>`;
-      }).join("");
+    if (box.querySelector("p")) box.innerHTML = "";
+    for (const [name, g] of Object.entries(d.groups)) {
+      let el = box.querySelector(`details[data-group="${name}"]`);
+      if (!el) {
+        el = document.createElement("details");
+        el.dataset.group = name;
+        el.innerHTML = "<summary></summary><table></table>";
+        el.addEventListener("toggle", () => { if (el.open && humanoid.diagnostics) renderGroups(humanoid.diagnostics); });
+        box.appendChild(el);
+      }
       const bad = g.statuses.filter((s) => s.level !== 0).length;
-      return `<details data-group="${esc(name)}"${open.has(name) ? " open" : ""}><summary>${pill(g.level)}${esc(name)} ` +
-        `<span class="muted">(${g.statuses.length}${bad ? `, ${bad} not OK` : ""})</span></summary><table>${rows}</table></details>`;
-    }).join("");
+      const summary = `${pill(g.level)}${esc(name)} <span class="muted">(${g.statuses.length}${bad ? `, ${bad} not OK` : ""})</span>`;
+      const head = el.querySelector("summary");
+      if (head.innerHTML !== summary) head.innerHTML = summary;
+      const table = el.querySelector("table");
+      if (el.open) table.innerHTML = groupRows(g);
+      else if (table.innerHTML) table.innerHTML = "";
+    }
   }
 
   humanoid.onDiagnostics = (d) => {
