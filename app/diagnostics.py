@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 from prometheus_client import CollectorRegistry, generate_latest
 from prometheus_client.core import GaugeMetricFamily
 
-from robot.interface import DiagnosticArray, DiagnosticStatus, Level
+from robot.interface import DiagnosticArray, DiagnosticStatus, Level, worst_level
 
 if TYPE_CHECKING:
     from app.runtime import Runtime
@@ -135,15 +135,14 @@ def diagnostics_json(array: DiagnosticArray) -> dict[str, Any]:
         "monitor_cpu_ms": array.monitor_cpu_ms,
         "alarms": alarms,
         "groups": {
-            name: {"level": int(_worst(items)), "level_name": _worst(items).name, "statuses": items}
+            name: {
+                "level": int(w := worst_level(Level(i["level"]) for i in items)),
+                "level_name": w.name,
+                "statuses": items,
+            }
             for name, items in groups.items()
         },
     }
-
-
-def _worst(items: list[dict[str, Any]]) -> Level:
-    rank = {Level.OK: 0, Level.WARN: 1, Level.STALE: 2, Level.ERROR: 3}
-    return max((Level(i["level"]) for i in items), key=rank.__getitem__, default=Level.OK)
 
 
 # ---------------------------------------------------------------------------------------------------------------

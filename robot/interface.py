@@ -6,6 +6,7 @@ these cross a pipe unchanged.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from enum import IntEnum, StrEnum
 from typing import TYPE_CHECKING, Any, Protocol
@@ -481,6 +482,14 @@ class RobotState:
     torque_enabled: bool | None = None  # the real robot's servos (None in simulation, where they are always on)
 
 
+_SEVERITY = {Level.OK: 0, Level.WARN: 1, Level.STALE: 2, Level.ERROR: 3}
+
+
+def worst_level(levels: Iterable[Level]) -> Level:
+    """The worst of some levels (STALE counts as worse than WARN, below ERROR: the data is missing, not bad)."""
+    return max(levels, key=_SEVERITY.__getitem__, default=Level.OK)
+
+
 @dataclass(frozen=True)
 class DiagnosticStatus:
     """One component's health, as ROS diagnostic_msgs/DiagnosticStatus. `name` is "group/component" (e.g.
@@ -509,9 +518,7 @@ class DiagnosticArray:
 
     @property
     def level(self) -> Level:
-        """The worst level (STALE counts as worse than WARN, below ERROR: the data is missing, not bad)."""
-        rank = {Level.OK: 0, Level.WARN: 1, Level.STALE: 2, Level.ERROR: 3}
-        return max((s.level for s in self.statuses), key=rank.__getitem__, default=Level.OK)
+        return worst_level(s.level for s in self.statuses)
 
     def find(self, name: str) -> DiagnosticStatus | None:
         return next((s for s in self.statuses if s.name == name), None)

@@ -13,11 +13,6 @@ from robot.interface import ControlStats, DiagnosticStatus, Level, PerceptionSta
 RATE_SETTLED_S = 3.0  # a sensor's rate is judged once it has run this long (its first frames come unevenly)
 
 
-def _worst(*levels: Level) -> Level:
-    rank = {Level.OK: 0, Level.WARN: 1, Level.STALE: 2, Level.ERROR: 3}
-    return max(levels, key=rank.__getitem__, default=Level.OK)
-
-
 def control_status(
     stats: ControlStats, tick_age_s: float | None, misses_per_s: float, realtime: bool, limits: Thresholds
 ) -> DiagnosticStatus:
@@ -172,7 +167,3 @@ def sensor_statuses(
             level, message = Level.OK, f"{hz:.1f} Hz"
         statuses.append(DiagnosticStatus(f"sensors/{name}", level, message, values=values))
     return statuses
-
-
-def worst_level(statuses: Sequence[DiagnosticStatus]) -> Level:
-    return _worst(*(s.level for s in statuses))

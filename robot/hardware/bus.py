@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import logging
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from dynamixel_sdk import COMM_RX_CORRUPT, COMM_SUCCESS, GroupSyncRead, GroupSyncWrite, PacketHandler, PortHandler
@@ -115,7 +115,6 @@ class BusCounters:
     failed_reads: int = 0
     crc_errors: int = 0
     timeouts: int = 0
-    read_ms: list[float] = field(default_factory=list)
 
 
 class DynamixelBus:
@@ -180,13 +179,6 @@ class DynamixelBus:
         if result != COMM_SUCCESS:
             raise BusError(f"torque {'on' if enabled else 'off'}: {self.packets.getTxRxResult(result)}")
 
-    def torque_states(self) -> dict[str, bool | None]:
-        out: dict[str, bool | None] = {}
-        for j in self.joints:
-            value, result, _ = self.packets.read1ByteTxRx(self.port, j.servo_id, ct.TORQUE_ENABLE.address)
-            out[j.joint] = bool(value) if result == COMM_SUCCESS else None
-        return out
-
     def write_goals(self, targets: np.ndarray) -> float:
         """Each target clamped to its joint's limits, converted to servo ticks, all in one sync write (ms taken)."""
         started = time.perf_counter()
@@ -211,11 +203,11 @@ class DynamixelBus:
             failed += self._read_block(self._reader(*SLOW_POWER), SLOW_POWER)
         self.counters.ticks += 1
         self.counters.failed_reads += failed
-        reading = self._last
-        reading.lost = tuple(j.joint for j in self.joints if self._health[j.servo_id].lost)
-        reading.failed_reads = failed
-        reading.read_ms = (time.perf_counter() - started) * 1e3
-        return BusReading(**{k: (v.copy() if isinstance(v, np.ndarray) else v) for k, v in reading.__dict__.items()})
+        last = self._last  # the arrays kept up to date by _store; copied so the caller's cannot change under it
+        return BusReading(last.positions.copy(), last.velocities.copy(), last.currents_a.copy(),
+                          last.voltages_v.copy(), last.temperatures_c.copy(), last.hardware_errors.copy(),
+                          lost=tuple(j.joint for j in self.joints if self._health[j.servo_id].lost),
+                          failed_reads=failed, read_ms=(time.perf_counter() - started) * 1e3)  # fmt: skip
 
     def reboot(self, joint: str) -> bool:
         """Reboot one servo (clears a latched hardware error; its torque comes back off). It is read again."""

@@ -25,7 +25,6 @@ from robot.hardware.config import HardwareConfig
 from robot.hardware.xm430 import STALL_CURRENT_A, ServoReadings
 from robot.interface import (
     CommandReply,
-    ControlStats,
     DiagnosticArray,
     EStop,
     Event,
@@ -372,7 +371,7 @@ class HardwareWorker:
                 objects=(),
                 held_object=None,
                 plan=None,
-                control=self._stats.snapshot() or ControlStats(),
+                control=self._stats.snapshot(),
                 torque_enabled=self._torque,
             )
         )
