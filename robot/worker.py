@@ -1259,6 +1259,9 @@ class RobotWorker:
                 return
             with self._lock:
                 if job.cancel.is_set() or self._estop_latched:
+                    # an e-stop may have drained the queue just after this job left it: end it here, visibly
+                    if job.status.state != PlanState.CANCELLED:
+                        self._end_unstarted(job, "cancelled by e-stop" if self._estop_latched else "cancelled")
                     continue
                 self._current_job = job
                 # A new plan starts from the standing posture (a move, so only after an explicit command).

@@ -128,6 +128,26 @@ def test_latched_estop_refuses_motion_and_release_restarts_nothing(make_worker) 
     assert np.max(np.abs(np.array(state.qpos)[7:] - frozen[7:])) < 0.02
 
 
+def test_a_command_sent_just_before_an_estop_always_ends_cancelled(make_worker) -> None:
+    """The e-stop can land while the task thread is taking the plan off its queue: the plan must still end
+    visibly cancelled, never vanish (CI once caught the plan lost in that gap)."""
+    worker = make_worker(realtime=True)
+    for attempt in range(15):
+        reply = worker.submit(RunCommand(f"say attempt {attempt}"))
+        assert reply.accepted
+        assert worker.submit(EStop(source="test")).accepted
+        cancelled = lambda s, c=reply.command_id: (  # noqa: E731
+            s.estop_latched and s.plan is not None and s.plan.command_id == c and s.plan.state == PlanState.CANCELLED
+        )
+        assert worker.wait_for(cancelled, 3.0), attempt
+        assert worker.wait_for(lambda s: s.mode == Mode.ESTOP, 2.0)
+        for _ in range(50):  # the release is refused while the stop is still being applied
+            if worker.submit(ReleaseEStop()).accepted:
+                break
+            time.sleep(0.02)
+        assert worker.wait_for(lambda s: not s.estop_latched, 2.0)
+
+
 def test_replan_reruns_the_current_command_as_a_new_revision(make_worker) -> None:
     worker = make_worker(realtime=False)
     assert worker.submit(Replan()).refusal == Refusal.NOTHING_TO_REPLAN
