@@ -51,7 +51,8 @@ class Runtime:
             from robot.hardware.worker import HardwareWorker
 
             worker = HardwareWorker(settings.hardware_config(), generate_world(settings.seed),
-                                    diagnostics=settings.diagnostics, disk_path=settings.data_dir)  # fmt: skip
+                                    diagnostics=settings.diagnostics, disk_path=settings.data_dir,
+                                    deadman_s=settings.deadman_s)  # fmt: skip
         if worker is None:
             worker = (
                 WorkerProcess(

@@ -35,6 +35,13 @@ class Settings(BaseSettings):
     viser_host: str = Field("127.0.0.1", description="interface the viser server binds to")
     backend: Literal["sim", "dynamixel"] = Field("sim", description="sim (MuJoCo) or dynamixel (the real robot)")
     robot_config: str = Field(str(REPO_ROOT / "robot.toml"), description="the real robot's servos (see README)")
+    deadman_s: float = Field(
+        1.5,
+        ge=0,
+        le=10,
+        description="real robot: torque off (after the controlled stop) when no operator page or "
+        "script has sent a heartbeat for this long; 0 turns the deadman off",
+    )
     dynamixel_port: str = Field("", description="the U2D2's serial device; overrides the robot configuration's")
     seed: int = Field(0, ge=0)
     control_hz: float = Field(100.0, gt=0, le=1000)

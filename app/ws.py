@@ -5,7 +5,9 @@ Messages from the server: {"type": "hello", ...}, {"type": "state", "state": ...
 {"type": "estop_ack", ...}, {"type": "error", "message": ...}.
 Messages to the server: {"type": "estop", "client_time_s": float | null}, {"type": "estop_release"},
 {"type": "teleop", "vx": float, "vy": float, "yaw_rate": float} (repeat every 100 ms while driving; a refusal
-is answered with {"type": "teleop_ack", ...}), {"type": "teleop_stop"}, {"type": "ping", "t": any}.
+is answered with {"type": "teleop_ack", ...}), {"type": "teleop_stop"}, {"type": "ping", "t": any},
+{"type": "heartbeat"} (the page sends one every 250 ms: on the real robot torque stays on only while an operator
+heartbeats, see `OperatorHeartbeat`; not answered).
 A socket that drove the robot stops it when it closes: the browser's connection is part of the deadman.
 """
 
@@ -22,7 +24,7 @@ from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 from app.diagnostics import diagnostics_json, snapshot
 from app.runtime import Runtime
 from app.serialize import event_json, reply_json, state_json
-from robot.interface import EStop, ReleaseEStop, StopTeleop, Teleop
+from robot.interface import EStop, OperatorHeartbeat, ReleaseEStop, StopTeleop, Teleop
 
 router = APIRouter()
 MAX_MESSAGE_BYTES = 4096
@@ -75,6 +77,8 @@ async def _receive(ws: WebSocket, rt: Runtime, drove: list[bool]) -> None:
                 await ws.send_json({"type": "teleop_ack", **reply_json(reply)})
         elif kind == "teleop_stop":
             rt.worker.submit(StopTeleop(source="browser"))
+        elif kind == "heartbeat":
+            rt.worker.submit(OperatorHeartbeat(source="browser"))
         elif kind == "ping":
             await ws.send_json({"type": "pong", "t": message.get("t"), "server_time_s": time.time()})
         else:

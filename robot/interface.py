@@ -200,6 +200,15 @@ class SetTorque:
     source: str = "api"
 
 
+@dataclass(frozen=True)
+class OperatorHeartbeat:
+    """The operator is there (a page open, a script alive): the deadman. On the real robot, torque needs one at
+    least every `deadman_s` (the page sends one every 250 ms), or it stops as for an e-stop: the controlled-stop
+    posture, then torque off. The simulator takes it and has nothing to do."""
+
+    source: str = "browser"
+
+
 class Posture(StrEnum):
     STAND = "stand"  # the walk-ready stance every walk starts from and ends in
     CROUCH = "crouch"
@@ -247,7 +256,7 @@ class ResetRobot:
 
 PlanCommand = RunCommand | ExecutePlan | Replan | CancelPlan | ApprovePlan | PausePlan | ResumePlan | SetApproval
 MotionCommand = Teleop | StopTeleop | SetPosture | ResetRobot | PlaceObstacle | InjectFault | SetTorque
-Command = PlanCommand | MotionCommand | EStop | ReleaseEStop
+Command = PlanCommand | MotionCommand | EStop | ReleaseEStop | OperatorHeartbeat
 
 
 class Refusal(StrEnum):

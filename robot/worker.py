@@ -54,6 +54,7 @@ from robot.interface import (
     Mode,
     NavigationState,
     ObjectPose,
+    OperatorHeartbeat,
     PausePlan,
     PerceptionState,
     PlaceObstacle,
@@ -364,6 +365,8 @@ class RobotWorker:
         if isinstance(command, SetTorque):
             return CommandReply(False, "the simulated servos are always powered: torque is for the real robot",
                                 Refusal.UNSUPPORTED)  # fmt: skip
+        if isinstance(command, OperatorHeartbeat):
+            return CommandReply(True, "operator present (the simulation has no torque to keep on)")
         return CommandReply(False, f"unknown command type {type(command).__name__}", Refusal.INVALID)
 
     def state(self) -> RobotState:

@@ -18,6 +18,7 @@ from robot.interface import (
     Command,
     EStop,
     ExecutePlan,
+    OperatorHeartbeat,
     PausePlan,
     PlaceObstacle,
     Posture,
@@ -252,6 +253,13 @@ def torque(body: TorqueIn, rt: RuntimeDep) -> dict[str, Any]:
     """Real robot: every servo's torque on (it first holds where it stands) or off; 501 in simulation, 409 while
     the e-stop is latched."""
     return _accepted(rt, SetTorque(body.enabled, source="api"))
+
+
+@router.post("/heartbeat")
+def heartbeat(rt: RuntimeDep) -> dict[str, Any]:
+    """The operator deadman for scripts (the page sends its own over the WebSocket): on the real robot, torque
+    stays on only while a heartbeat comes at least every `HUMANOID_DEADMAN_S` (1.5 s)."""
+    return _accepted(rt, OperatorHeartbeat(source="api"))
 
 
 @router.post("/reset")

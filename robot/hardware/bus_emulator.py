@@ -2,10 +2,12 @@
 it would a U2D2's /dev/ttyUSB0. For tests and benchmarks of the hardware backend without hardware.
 
 Each emulated servo has the XM430 control table, a simple motor (position control with the servo's no-load
-speed, current from the load, winding temperature) and faults to inject: a dead servo, dropped replies
-(timeouts), corrupted replies (CRC errors), overheating. It answers ping, read, write, sync read, sync write and
-reboot (broadcast ping and sync read answered in ID order); with `wire_time` the emulator also takes the time
-the bytes would take on the wire at the bus's baud rate.
+speed, current from the load, winding temperature), the bus watchdog (address 98: a servo with torque on that
+hears nothing for that long stops where it is and refuses new goals until the watchdog is cleared) and faults to
+inject: a dead servo, dropped replies (timeouts), corrupted replies (CRC errors), overheating. It answers ping,
+read, write, sync read, Fast Sync Read, sync write and reboot (broadcast ping and sync read answered in the order
+asked). Servos start as shipped (a 500 us return delay). With `wire_time` the emulator also takes the time the
+bytes would take on the wire at the bus's baud rate, and each servo's return delay.
 """
 
 from __future__ import annotations
@@ -25,7 +27,16 @@ from multiprocessing.connection import Connection
 from typing import Any
 
 from robot.hardware import control_table as ct
-from robot.hardware.protocol2 import ALERT_BIT, BROADCAST_ID, Instruction, Packet, PacketParser, StatusError, status
+from robot.hardware.protocol2 import (
+    ALERT_BIT,
+    BROADCAST_ID,
+    Instruction,
+    Packet,
+    PacketParser,
+    StatusError,
+    fast_sync_status,
+    status,
+)
 from robot.hardware.xm430 import HardwareError
 
 NO_LOAD_SPEED_RAD_S = 46.0 * 2 * math.pi / 60  # 46 rpm at 12 V
@@ -53,13 +64,15 @@ class EmulatedXM430:
         self._position = position_rad
         self._velocity = 0.0
         for field, value in ((ct.MODEL_NUMBER, ct.XM430_W350_MODEL), (ct.FIRMWARE_VERSION, 48), (ct.ID, servo_id),
-                             (ct.BAUD_RATE, 3), (ct.RETURN_DELAY_TIME, 0), (ct.OPERATING_MODE, 3),
+                             (ct.BAUD_RATE, 3), (ct.RETURN_DELAY_TIME, ct.RETURN_DELAY_FACTORY),
+                             (ct.OPERATING_MODE, 3),
                              (ct.TEMPERATURE_LIMIT, 80), (ct.MAX_VOLTAGE_LIMIT, 160), (ct.MIN_VOLTAGE_LIMIT, 95),
                              (ct.CURRENT_LIMIT, 1193), (ct.MAX_POSITION_LIMIT, 4095), (ct.MIN_POSITION_LIMIT, 0),
                              (ct.SHUTDOWN, 0x34), (ct.STATUS_RETURN_LEVEL, 2), (ct.POSITION_P_GAIN, 800),
                              (ct.PROFILE_VELOCITY, 0)):  # fmt: skip
             self._set(field, value)
         self._set(ct.GOAL_POSITION, self._ticks(position_rad))
+        self.last_heard_s = time.monotonic()  # the last packet addressed to this servo (the bus watchdog's clock)
         self._refresh_present()
 
     @property
@@ -82,7 +95,19 @@ class EmulatedXM430:
 
     # the motor -----------------------------------------------------------------------------------------------
 
+    @property
+    def watchdog_tripped(self) -> bool:
+        return self.get(ct.BUS_WATCHDOG) < 0
+
+    def _check_watchdog(self) -> None:
+        watchdog = self.get(ct.BUS_WATCHDOG)
+        silent_ms = (time.monotonic() - self.last_heard_s) * 1e3
+        if self.get(ct.TORQUE_ENABLE) and watchdog > 0 and silent_ms > watchdog * ct.BUS_WATCHDOG_UNIT_MS:
+            self._set(ct.BUS_WATCHDOG, -1)
+            self._set(ct.GOAL_POSITION, self._ticks(self._position))  # it stops where it is, torque still on
+
     def step(self, dt: float) -> None:
+        self._check_watchdog()
         torque_on = self.get(ct.TORQUE_ENABLE) == 1
         if torque_on:
             goal = (self.get(ct.GOAL_POSITION) - ct.POSITION_CENTRE) / ct.POSITION_PER_RAD
@@ -136,6 +161,13 @@ class EmulatedXM430:
         enables = address <= ct.TORQUE_ENABLE.address < address + len(data) and data[ct.TORQUE_ENABLE.address - address]
         if latched and enables:
             return StatusError.RESULT_FAIL  # no torque while a shutdown error is latched
+        if address <= ct.BUS_WATCHDOG.address < address + len(data):
+            value = ct.BUS_WATCHDOG.decode(data[ct.BUS_WATCHDOG.address - address :])
+            if (self.watchdog_tripped and value != 0) or value < 0:
+                return StatusError.DATA_RANGE  # a tripped watchdog is cleared with 0 before it is set again
+        goals = (ct.GOAL_CURRENT.address, ct.GOAL_POSITION.address + ct.GOAL_POSITION.size)
+        if self.watchdog_tripped and address < goals[1] and address + len(data) > goals[0]:
+            return StatusError.DATA_RANGE  # no new goal until the host clears the watchdog
         if address <= ct.GOAL_POSITION.address and address + len(data) >= ct.GOAL_POSITION.address + 4:
             offset = ct.GOAL_POSITION.address - address
             goal = ct.GOAL_POSITION.decode(data[offset : offset + 4])
@@ -152,6 +184,10 @@ class EmulatedXM430:
 
     def error_byte(self, error: int) -> int:
         return int(error) | (ALERT_BIT if self.get(ct.HARDWARE_ERROR_STATUS) else 0)
+
+    @property
+    def return_delay_s(self) -> float:
+        return self.get(ct.RETURN_DELAY_TIME) * ct.RETURN_DELAY_UNIT_US * 1e-6
 
 
 @dataclass
@@ -263,9 +299,39 @@ class EmulatedBus:
         if faults.drop_replies > 0:
             faults.drop_replies -= 1
             return []
+        if self.wire_time:
+            time.sleep(servo.return_delay_s)
         packet = status(servo.servo_id, servo.error_byte(error), params)
         if faults.corrupt_replies > 0:
             faults.corrupt_replies -= 1
+            packet = packet[:-1] + bytes([packet[-1] ^ 0xFF])
+        return [packet]
+
+    def _fast_sync_read(self, address: int, length: int, servo_ids: bytes) -> list[bytes]:
+        """One packet that every servo asked adds its part to, in turn. A servo that is dead or drops its reply
+        breaks the chain: the packet ends there, short (the master times out on it)."""
+        parts: list[tuple[int, int, bytes]] = []
+        corrupt = False
+        for servo_id in servo_ids:
+            servo = self.servos.get(servo_id)
+            if servo is None or servo.faults.dead:
+                break
+            if servo.faults.drop_replies > 0:
+                servo.faults.drop_replies -= 1
+                break
+            if servo.faults.corrupt_replies > 0:
+                servo.faults.corrupt_replies -= 1
+                corrupt = True
+            error, data = servo.read(address, length)
+            parts.append((servo.error_byte(error), servo_id, data.ljust(length, b"\0")))
+        if not parts:
+            return []
+        if self.wire_time:
+            time.sleep(self.servos[parts[0][1]].return_delay_s)
+        packet = fast_sync_status(parts)
+        if len(parts) < len(servo_ids):  # cut where the chain broke: no closing CRC
+            packet = packet[:-2]
+        elif corrupt:
             packet = packet[:-1] + bytes([packet[-1] ^ 0xFF])
         return [packet]
 
@@ -274,7 +340,15 @@ class EmulatedBus:
         target = self.servos.get(packet.packet_id)
         if not packet.crc_ok:
             return self._reply(target, StatusError.CRC) if target is not None else []
+        now = time.monotonic()
+        heard = [target] if target is not None else []
+        if packet.packet_id == BROADCAST_ID:  # a sync or fast read or write: every servo hears it
+            heard = list(self.servos.values())
+        for servo in heard:
+            servo.last_heard_s = now
         instruction = packet.instruction
+        if instruction == Instruction.FAST_SYNC_READ and packet.packet_id == BROADCAST_ID and len(p) >= 4:
+            return self._fast_sync_read(p[0] | p[1] << 8, p[2] | p[3] << 8, p[4:])
         if instruction == Instruction.PING:
             servos = sorted(self.servos.values(), key=lambda s: s.servo_id) if packet.packet_id == BROADCAST_ID \
                 else [target] if target is not None else []  # fmt: skip

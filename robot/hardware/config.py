@@ -7,6 +7,8 @@ grippers 21-24); `humanoid hardware calibrate` records the zero offsets into the
     baudrate = 2000000
     latency_timer_ms = 1      # the U2D2's FTDI latency timer (set to 1 ms by a udev rule)
     control_hz = 100
+    fast_sync_read = true     # one reply packet for all servos (firmware 45+); false: a reply from each servo
+    bus_watchdog_ms = 100     # a servo that hears nothing this long stops where it is (0: off)
 
     [joints.r_knee]
     id = 13
@@ -77,6 +79,8 @@ class HardwareConfig:
     # extra wait for a reply beyond its wire time and the USB latency (the SDK's 2 ms); more for a busy host or an
     # emulated bus, whose replies depend on the scheduler
     reply_margin_ms: float = 2.0
+    fast_sync_read: bool = True
+    bus_watchdog_ms: int = 100
     joints: tuple[JointServo, ...] = field(default_factory=tuple)
 
     def __post_init__(self) -> None:
@@ -85,6 +89,12 @@ class HardwareConfig:
             raise ConfigError(f"servo IDs repeat: {sorted(i for i in ids if ids.count(i) > 1)}")
         if self.baudrate not in SUPPORTED_BAUD:
             raise ConfigError(f"baud rate {self.baudrate} is not one the XM430 supports: {SUPPORTED_BAUD}")
+        period_ms = 1e3 / self.control_hz
+        if self.bus_watchdog_ms and not 3 * period_ms <= self.bus_watchdog_ms <= 127 * ct.BUS_WATCHDOG_UNIT_MS:
+            raise ConfigError(
+                f"bus_watchdog_ms {self.bus_watchdog_ms} must be 0 (off) or from three control periods "
+                f"({3 * period_ms:.0f} ms) to {127 * ct.BUS_WATCHDOG_UNIT_MS} ms"
+            )
         for j in self.joints:
             if not 0 <= j.servo_id <= 252:
                 raise ConfigError(f"{j.joint}: servo ID {j.servo_id} is outside 0-252")
@@ -141,6 +151,8 @@ def load_config(path: str | Path) -> HardwareConfig:
                           latency_timer_ms=float(bus.get("latency_timer_ms", 1.0)),
                           control_hz=float(bus.get("control_hz", 100.0)),
                           reply_margin_ms=float(bus.get("reply_margin_ms", 2.0)),
+                          fast_sync_read=bool(bus.get("fast_sync_read", True)),
+                          bus_watchdog_ms=int(bus.get("bus_watchdog_ms", 100)),
                           joints=tuple(sorted(joints, key=lambda j: order[j.joint])))  # fmt: skip
 
 
@@ -148,7 +160,8 @@ def dump_config(config: HardwareConfig) -> str:
     lines = ["# humanoid_v1 on Dynamixel XM430-W350 servos (see robot/hardware/config.py)", "", "[bus]",
              f'port = "{config.port}"', f"baudrate = {config.baudrate}",
              f"latency_timer_ms = {config.latency_timer_ms!r}", f"control_hz = {config.control_hz!r}",
-             f"reply_margin_ms = {config.reply_margin_ms!r}"]  # fmt: skip
+             f"reply_margin_ms = {config.reply_margin_ms!r}", f"fast_sync_read = {str(config.fast_sync_read).lower()}",
+             f"bus_watchdog_ms = {config.bus_watchdog_ms}"]  # fmt: skip
     for j in config.joints:
         lines += ["", f"[joints.{j.joint}]", f"id = {j.servo_id}", f"direction = {j.direction}",
                   f"offset_rad = {j.offset_rad!r}", f"scale = {j.scale!r}", f"min = {j.lower!r}",

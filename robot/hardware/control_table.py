@@ -40,6 +40,7 @@ LED = Field(65, 1)
 STATUS_RETURN_LEVEL = Field(68, 1)
 HARDWARE_ERROR_STATUS = Field(70, 1)
 POSITION_P_GAIN = Field(84, 2)
+BUS_WATCHDOG = Field(98, 1, signed=True)  # 20 ms units; 0 off; -1 once it has tripped
 GOAL_CURRENT = Field(102, 2, signed=True)
 GOAL_VELOCITY = Field(104, 4, signed=True)
 PROFILE_ACCELERATION = Field(108, 4)
@@ -58,6 +59,9 @@ TABLE_SIZE = 147
 XM430_W350_MODEL = 1020
 # Baud Rate field values (address 8) to bits per second.
 BAUD_RATES = {0: 9_600, 1: 57_600, 2: 115_200, 3: 1_000_000, 4: 2_000_000, 5: 3_000_000, 6: 4_000_000}
+BUS_WATCHDOG_UNIT_MS = 20
+RETURN_DELAY_UNIT_US = 2
+RETURN_DELAY_FACTORY = 250  # 500 us: a shipped servo waits this long before each reply
 # Units: position 0.088 deg (4096 a turn, 2048 the centre), current 2.69 mA, velocity 0.229 rpm, voltage 0.1 V.
 POSITION_PER_RAD = 4096 / (2 * 3.141592653589793)
 POSITION_CENTRE = 2048

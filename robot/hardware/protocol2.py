@@ -102,6 +102,19 @@ def status(packet_id: int, error: int, params: bytes = b"") -> bytes:
     return encode(packet_id, Instruction.STATUS, bytes([error]) + params)
 
 
+def fast_sync_status(replies: list[tuple[int, int, bytes]]) -> bytes:
+    """The one status packet of a Fast Sync Read: each servo in turn appends its error, ID, data and the CRC of the
+    packet so far (the last one is the packet's CRC). Not stuffed: the SDK reads it as sent.
+    `replies`: (error, servo ID, data) in the order the read asked for them."""
+    length = 1 + sum(len(data) + 4 for _, _, data in replies)
+    out = bytearray(HEADER + bytes([BROADCAST_ID, length & 0xFF, length >> 8, Instruction.STATUS]))
+    for error, servo_id, data in replies:
+        out += bytes([error, servo_id]) + data
+        crc = crc16(bytes(out))
+        out += bytes([crc & 0xFF, crc >> 8])
+    return bytes(out)
+
+
 @dataclass(frozen=True)
 class Packet:
     packet_id: int

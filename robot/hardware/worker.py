@@ -2,9 +2,11 @@
 
 What it does on hardware today: torque on and off (off at start-up until the operator turns it on), postures
 (stand, crouch) at a capped joint speed, the e-stop (the controlled-stop posture, a slow crouch, then torque off),
-every goal clamped to the joint's limits, servos that stop answering or latch a hardware error surfaced in
-diagnostics (and stopping the robot), and the measured pose for the 3D mirror. Walking, perception and plans need
-the IMU, cameras and feet sensors the servo bus does not carry: they are refused with that reason.
+the same stop when the control loop stalls past the servos' bus watchdog (which has already stopped them where
+they were) or the browser's deadman lapses, every goal clamped to the joint's limits, servos that stop answering
+or latch a hardware error surfaced in diagnostics (and stopping the robot), and the measured pose for the 3D
+mirror. Walking, perception and plans need the IMU, cameras and feet sensors the servo bus does not carry: they
+are refused with that reason.
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ from robot.interface import (
     Event,
     Level,
     Mode,
+    OperatorHeartbeat,
     Posture,
     Refusal,
     ReleaseEStop,
@@ -46,6 +49,7 @@ from robot.sim.backend import MujocoSimBackend
 from robot.state_board import StateBoard
 
 ESTOP_TORQUE_OFF_AFTER_S = 3.0  # the controlled stop's crouch has this long before torque goes off
+DEADMAN_S = 1.5  # torque on needs an operator heartbeat at least this often (the page sends one every 250 ms)
 CONTROLLED_STOP_SPEED_RAD_S = 0.6
 NOT_ON_HARDWARE = "needs the IMU, cameras and foot sensors, which are not on the servo bus: simulation only for now"
 
@@ -59,12 +63,16 @@ class HardwareWorker:
         diagnostics: Thresholds | None = None,
         disk_path: str = ".",
         estop_torque_off_s: float = ESTOP_TORQUE_OFF_AFTER_S,
+        deadman_s: float = DEADMAN_S,
     ) -> None:
+        """`deadman_s`: 0 turns the operator deadman off (a script that keeps torque on by itself, at its risk)."""
         self.config = config
         self.layout = layout
         self.bus = bus or DynamixelBus(config)
         self.control_hz = config.control_hz
         self.estop_torque_off_s = estop_torque_off_s
+        self.deadman_s = deadman_s
+        self._heartbeat_s = time.monotonic()
         self.dt = 1.0 / config.control_hz
         self.joint_names = config.joint_names
         self._scene = MujocoSimBackend(layout)  # never stepped: the model the mirror draws the measured pose in
@@ -83,6 +91,7 @@ class HardwareWorker:
         self._positions = np.zeros(len(self.joint_names))
         self._targets = self._positions.copy()
         self._reading = None
+        self._last_tick_s: float | None = None
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._started_at = time.monotonic()
@@ -130,8 +139,10 @@ class HardwareWorker:
             self.bus.close()
             raise BusError(f"no answer from {', '.join(silent)} on {self.config.port}")
         with self._bus_lock:
-            self.bus.set_torque(False)
+            changes = self.bus.prepare()  # torque off; position mode, no return delay
             reading = self.bus.read()
+        if changes:
+            self._events.publish("hardware/setup", f"servo set-up changed: {'; '.join(changes)}", changes=changes)
         self._reading = reading
         self._positions = reading.positions.copy()
         self._targets = self._positions.copy()
@@ -168,6 +179,9 @@ class HardwareWorker:
     # RobotPort -------------------------------------------------------------------------------------------------
 
     def submit(self, command: Any) -> CommandReply:
+        if isinstance(command, OperatorHeartbeat):
+            self._heartbeat_s = time.monotonic()
+            return CommandReply(True, "operator present")
         if isinstance(command, EStop):
             with self._lock:
                 if not self._estop_latched:
@@ -287,9 +301,12 @@ class HardwareWorker:
                     reason=command.reason,
                 )
             elif isinstance(command, SetTorque):
-                if command.enabled:  # hold where it stands: no jump to an old goal
+                if command.enabled:  # hold where it stands: no jump to an old goal; the deadman starts now
+                    self._heartbeat_s = max(self._heartbeat_s, time.monotonic())
                     self._targets = self._positions.copy()
                     self._posture.hold(self._targets)
+                    self.bus.write_goals(self._targets)
+                    self.bus.arm_watchdog(self.config.bus_watchdog_ms)
                 self.bus.set_torque(command.enabled)
                 self._torque = command.enabled
                 self._events.publish(
@@ -317,8 +334,44 @@ class HardwareWorker:
             if finished - next_deadline > 5 * self.dt:
                 next_deadline = finished + self.dt
 
-    def _tick(self) -> None:
+    def _check_watchdog(self, gap_s: float) -> None:
+        """After a stall longer than the servos' bus watchdog: they have stopped and take no goals. The stall is
+        a loss of the control loop: re-arm them so the controlled stop can move, and stop."""
+        watchdog_ms = self.config.bus_watchdog_ms
+        if not (self._torque and watchdog_ms and gap_s * 1e3 > watchdog_ms):
+            return
+        tripped = self.bus.watchdog_tripped()
+        if not tripped:
+            return
+        self.bus.arm_watchdog(watchdog_ms)
+        reason = f"the control loop stalled for {gap_s * 1e3:.0f} ms"
+        self._events.publish(
+            "hardware/watchdog",
+            f"{reason}: the bus watchdog stopped {len(tripped)} servos where they were",
+            Level.ERROR,
+            joints=tripped,
+            gap_ms=round(gap_s * 1e3, 1),
+        )
+        self.submit(EStop(source="watchdog", reason=reason))
         self._apply_pending()
+
+    def _check_deadman(self) -> None:
+        """Torque on with no operator heartbeat for `deadman_s` (the page closed, the network or the browser
+        hung): the controlled stop, then torque off, as for an e-stop."""
+        if not (self._torque and self.deadman_s and self._estop_since is None):
+            return
+        silent_s = time.monotonic() - self._heartbeat_s
+        if silent_s > self.deadman_s:
+            reason = f"no operator heartbeat for {silent_s:.1f} s (deadman {self.deadman_s:g} s)"
+            self.submit(EStop(source="deadman", reason=reason))
+            self._apply_pending()
+
+    def _tick(self) -> None:
+        now = time.perf_counter()
+        gap, self._last_tick_s = now - (self._last_tick_s or now), now
+        self._apply_pending()
+        self._check_watchdog(gap)
+        self._check_deadman()
         reading = self.bus.read()
         newly_lost = set(reading.lost) - set(self._reading.lost if self._reading is not None else ())
         self._reading = reading

@@ -37,11 +37,22 @@ async function loadConfig() {
 }
 
 // ---- WebSocket -----------------------------------------------------------------------------------------------
+const HEARTBEAT_MS = 250;
 function connect() {
   const ws = new WebSocket(`${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/ws`);
   humanoid.ws = ws;
-  ws.onopen = () => setConn("connected", "badge-ok");
-  ws.onclose = () => { setConn("disconnected: retrying", "badge-err"); setTimeout(connect, 1000); };
+  ws.onopen = () => {
+    setConn("connected", "badge-ok");
+    // The deadman: on the real robot, torque stays on only while an operator page says it is there.
+    const beat = () => ws.readyState === WebSocket.OPEN && ws.send('{"type":"heartbeat"}');
+    beat();
+    ws.heartbeat = setInterval(beat, HEARTBEAT_MS);
+  };
+  ws.onclose = () => {
+    clearInterval(ws.heartbeat);
+    setConn("disconnected: retrying", "badge-err");
+    setTimeout(connect, 1000);
+  };
   ws.onmessage = (msg) => {
     const m = JSON.parse(msg.data);
     if (m.type === "state") renderState(m.state);

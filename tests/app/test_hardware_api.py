@@ -4,6 +4,7 @@ motion commands the bus cannot serve refused with the reason, servo diagnostics 
 from __future__ import annotations
 
 import dataclasses
+import time
 from collections.abc import Iterator
 
 import pytest
@@ -21,9 +22,13 @@ CONFIG = dataclasses.replace(default_config(), reply_margin_ms=100.0)
 
 
 @pytest.fixture
-def hardware_client(settings, layout) -> Iterator[tuple[TestClient, BusEmulator]]:
+def hardware_client(request, settings, layout) -> Iterator[tuple[TestClient, BusEmulator]]:
+    """The deadman is off unless a test asks for one (`@pytest.mark.parametrize("hardware_client", [s],
+    indirect=True)`): the other tests do not heartbeat."""
+    deadman_s = getattr(request, "param", 0.0)
     with BusEmulator([j.servo_id for j in CONFIG.joints]) as emulator:
-        worker = HardwareWorker(dataclasses.replace(CONFIG, port=emulator.port_name), layout)
+        worker = HardwareWorker(dataclasses.replace(CONFIG, port=emulator.port_name), layout, deadman_s=deadman_s,
+                                estop_torque_off_s=1.0)  # fmt: skip
         runtime = Runtime.start(settings.model_copy(update={"backend": "dynamixel"}), worker=worker)
         with TestClient(create_app(settings, runtime=runtime)) as client:
             yield client, emulator
@@ -48,3 +53,28 @@ def test_the_page_drives_the_real_robots_torque_and_is_told_what_it_cannot_do(ha
     wait_until(lambda: not client.get("/api/state").json()["torque_enabled"], timeout=8)  # crouched, then off
     session = client.get("/api/sessions").json()["items"][0]
     assert session["backend"] == "dynamixel"
+
+
+@pytest.mark.parametrize("hardware_client", [1.0], indirect=True)
+def test_torque_stays_on_only_while_the_page_heartbeats(hardware_client) -> None:
+    """The browser deadman: the page's WebSocket heartbeat keeps torque on; when the page goes (closed, hung,
+    cut off), the robot makes its controlled stop, then turns torque off."""
+    client, emulator = hardware_client
+    with client.websocket_connect("/ws") as ws:
+        ws.send_json({"type": "heartbeat"})
+        assert client.post("/api/torque", json={"enabled": True}).status_code == 200
+        wait_until(lambda: client.get("/api/state").json()["torque_enabled"])
+        for _ in range(10):  # 2.5 s, longer than the deadman: a heartbeat every 250 ms, as the page sends
+            ws.send_json({"type": "heartbeat"})
+            time.sleep(0.25)
+        state = client.get("/api/state").json()
+        assert state["torque_enabled"] and not state["estop_latched"]
+    # the page is gone
+    wait_until(lambda: client.get("/api/state").json()["estop_latched"], timeout=3)
+    stop = next(e for e in client.get("/api/events").json() if e["kind"] == "estop/latched")
+    assert stop["data"]["source"] == "deadman" and "no operator heartbeat" in stop["message"]
+    wait_until(lambda: emulator.read(14, ct.GOAL_POSITION) > ct.POSITION_CENTRE + 100)  # l_knee: crouching
+    wait_until(lambda: not client.get("/api/state").json()["torque_enabled"], timeout=5)
+    assert not any(emulator.read(j.servo_id, ct.TORQUE_ENABLE) for j in CONFIG.joints)
+    # a script keeps its own heartbeat through the API
+    assert client.post("/api/heartbeat").json()["accepted"] is True

@@ -114,3 +114,60 @@ def test_faults_a_dead_servo_timeouts_crc_errors_and_overheating(bus) -> None:
     emulator.set_temperature(7, 40.0)
     assert packets.reboot(port, 7)[0] == COMM_SUCCESS
     assert packets.read1ByteTxRx(port, 7, ct.HARDWARE_ERROR_STATUS.address)[:2] == (0, COMM_SUCCESS)
+
+
+def test_fast_sync_read_answers_every_servo_in_one_packet(bus) -> None:
+    emulator, port, packets = bus
+    goal = GroupSyncWrite(port, packets, ct.GOAL_POSITION.address, 4)
+    torque = GroupSyncWrite(port, packets, ct.TORQUE_ENABLE.address, 1)
+    for servo_id in IDS:
+        torque.addParam(servo_id, [1])
+        goal.addParam(servo_id, list(ct.GOAL_POSITION.encode(2048 - 7 * servo_id)))
+    assert torque.txPacket() == COMM_SUCCESS and goal.txPacket() == COMM_SUCCESS
+    reader = GroupSyncRead(port, packets, ct.PRESENT_POSITION.address, 4)
+    for servo_id in IDS:
+        reader.addParam(servo_id)
+    deadline = time.monotonic() + 3
+    while True:
+        assert reader.fastSyncRead() == COMM_SUCCESS
+        positions = {i: reader.getData(i, ct.PRESENT_POSITION.address, 4) for i in IDS}
+        if all(abs(positions[i] - (2048 - 7 * i)) <= 1 for i in IDS) or time.monotonic() > deadline:
+            break
+    assert all(abs(positions[i] - (2048 - 7 * i)) <= 1 for i in IDS)
+    before = emulator.stats().replies
+    reads = 0
+    for _ in range(5):
+        assert reader.fastSyncRead() == COMM_SUCCESS
+        reads += 1
+    assert emulator.stats().replies - before == reads  # one reply packet per read, not one per servo
+
+    # a servo that does not answer breaks the chain: the read fails, and no stale data is passed off as read
+    emulator.set_fault(9, dead=True)
+    assert reader.fastSyncRead() in (COMM_RX_TIMEOUT, COMM_RX_CORRUPT)
+    emulator.set_fault(9, dead=False)
+    emulator.set_fault(12, corrupt_replies=1)
+    assert reader.fastSyncRead() == COMM_RX_CORRUPT
+    assert reader.fastSyncRead() == COMM_SUCCESS
+
+
+def test_the_bus_watchdog_stops_a_servo_that_hears_nothing(bus) -> None:
+    emulator, port, packets = bus
+    assert packets.write1ByteTxRx(port, 2, ct.TORQUE_ENABLE.address, 1)[:2] == (COMM_SUCCESS, 0)
+    assert packets.write1ByteTxRx(port, 2, ct.BUS_WATCHDOG.address, 5)[:2] == (COMM_SUCCESS, 0)  # 100 ms
+    for _ in range(10):  # heard every 20 ms: nothing trips
+        packets.write4ByteTxRx(port, 2, ct.GOAL_POSITION.address, 2048)
+        time.sleep(0.02)
+    assert emulator.read(2, ct.BUS_WATCHDOG) == 5
+    assert packets.write4ByteTxRx(port, 2, ct.GOAL_POSITION.address, 3000)[:2] == (COMM_SUCCESS, 0)
+    time.sleep(0.25)  # the host goes quiet mid-move
+    assert emulator.read(2, ct.BUS_WATCHDOG) == -1
+    stopped_at = emulator.position_rad(2)
+    time.sleep(0.1)
+    assert emulator.position_rad(2) == pytest.approx(stopped_at, abs=1e-3)  # it stopped short of its goal
+    assert abs(stopped_at - (3000 - 2048) / ct.POSITION_PER_RAD) > 0.1
+    assert emulator.read(2, ct.TORQUE_ENABLE) == 1  # holding, torque on
+    # no new goal, nor a new watchdog value, until the host clears it with 0
+    assert packets.write4ByteTxRx(port, 2, ct.GOAL_POSITION.address, 3000)[1] == 4  # data range error
+    assert packets.write1ByteTxRx(port, 2, ct.BUS_WATCHDOG.address, 5)[1] == 4
+    assert packets.write1ByteTxRx(port, 2, ct.BUS_WATCHDOG.address, 0)[:2] == (COMM_SUCCESS, 0)
+    assert packets.write4ByteTxRx(port, 2, ct.GOAL_POSITION.address, 3000)[:2] == (COMM_SUCCESS, 0)
