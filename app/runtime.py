@@ -16,7 +16,7 @@ from app.sessions.recorder import SessionRecorder
 from app.settings import Settings
 from robot.interface import RobotPort
 from robot.model.world import generate_world
-from robot.process import WorkerProcess
+from robot.process import HardwareSpec, WorkerProcess
 from robot.worker import RobotWorker
 
 log = logging.getLogger(__name__)
@@ -48,11 +48,15 @@ class Runtime:
         db = make_session_factory(engine)
         close_interrupted_sessions(db)
         if worker is None and settings.backend == "dynamixel":
-            from robot.hardware.worker import HardwareWorker
+            spec = HardwareSpec(settings.hardware_config(), settings.deadman_s)
+            if settings.worker_process:  # its loop must not share the interpreter lock with the web server
+                worker = WorkerProcess(settings.seed, diagnostics=settings.diagnostics, disk_path=settings.data_dir,
+                                       hardware=spec)  # fmt: skip
+            else:
+                from robot.hardware.worker import HardwareWorker
 
-            worker = HardwareWorker(settings.hardware_config(), generate_world(settings.seed),
-                                    diagnostics=settings.diagnostics, disk_path=settings.data_dir,
-                                    deadman_s=settings.deadman_s)  # fmt: skip
+                worker = HardwareWorker(spec.config, generate_world(settings.seed), diagnostics=settings.diagnostics,
+                                        disk_path=settings.data_dir, deadman_s=spec.deadman_s)  # fmt: skip
         if worker is None:
             worker = (
                 WorkerProcess(

@@ -1,4 +1,5 @@
-"""The robot worker in its own process, behind the same `RobotPort` interface.
+"""The robot worker (the simulated robot's, or the real robot's with `hardware=`) in its own process, behind the
+same `RobotPort` interface.
 
 Why: the web server, the 3D mirror and the browsers' WebSockets all run Python threads; in one process they
 compete with the control loop for the interpreter lock and made it miss deadlines. In its own process the control
@@ -20,6 +21,7 @@ import traceback
 from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
 from concurrent.futures import TimeoutError as FutureTimeout
+from dataclasses import dataclass
 from multiprocessing.connection import Connection
 from typing import Any
 
@@ -35,6 +37,7 @@ from robot.interface import (
     EStop,
     Event,
     InjectFault,
+    OperatorHeartbeat,
     PausePlan,
     PlaceObstacle,
     Refusal,
@@ -46,6 +49,7 @@ from robot.interface import (
     SensorFeed,
     SetApproval,
     SetPosture,
+    SetTorque,
     StopTeleop,
     Teleop,
 )
@@ -62,7 +66,15 @@ REPLY_TIMEOUT_S = 90.0
 STARTUP_TIMEOUT_S = 180.0
 # Commands that must never queue behind a slow one: handled inline by the child's receiving thread.
 _IMMEDIATE = (EStop, ReleaseEStop, CancelPlan, Teleop, StopTeleop, SetPosture, ResetRobot, PlaceObstacle, PausePlan,
-              ApprovePlan, ResumePlan, SetApproval, InjectFault)  # fmt: skip
+              ApprovePlan, ResumePlan, SetApproval, InjectFault, SetTorque, OperatorHeartbeat)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class HardwareSpec:
+    """What the child needs to drive the real robot instead of the simulation."""
+
+    config: Any  # robot.hardware.config.HardwareConfig (imported in the child only: dynamixel-sdk is optional)
+    deadman_s: float = 1.5
 
 
 class WorkerProcess:
@@ -80,7 +92,9 @@ class WorkerProcess:
         voice: VoiceConfig | None = None,
         diagnostics: Thresholds | None = None,
         disk_path: str = ".",
+        hardware: HardwareSpec | None = None,
     ) -> None:
+        self._hardware = hardware
         self._seed = seed
         self._thresholds = diagnostics
         self._disk_path = disk_path
@@ -125,6 +139,7 @@ class WorkerProcess:
                 self._voice,
                 self._thresholds,
                 self._disk_path,
+                self._hardware,
             ),
             name="robot-worker",
             daemon=True,
@@ -266,23 +281,33 @@ def child_main(
     voice: VoiceConfig | None = None,
     diagnostics: Thresholds | None = None,
     disk_path: str = ".",
+    hardware: HardwareSpec | None = None,
 ) -> None:
     """Entry point of the worker process: build the robot, then serve commands until told to stop."""
     try:
         from robot.model.world import generate_world
-        from robot.worker import RobotWorker
 
-        worker = RobotWorker(generate_world(seed), realtime=realtime, control_hz=control_hz, perception=perception,
-                             planning=planning, max_auto_replans=max_auto_replans,
-                             approve_plans=approve_plans, voice=voice, diagnostics=diagnostics,
-                             disk_path=disk_path)  # fmt: skip
+        if hardware is not None:
+            from robot.hardware.worker import HardwareWorker
+
+            worker: Any = HardwareWorker(hardware.config, generate_world(seed), diagnostics=diagnostics,
+                                         disk_path=disk_path, deadman_s=hardware.deadman_s)  # fmt: skip
+        else:
+            from robot.worker import RobotWorker
+
+            worker = RobotWorker(generate_world(seed), realtime=realtime, control_hz=control_hz,
+                                 perception=perception, planning=planning, max_auto_replans=max_auto_replans,
+                                 approve_plans=approve_plans, voice=voice, diagnostics=diagnostics,
+                                 disk_path=disk_path)  # fmt: skip
         subscription = worker.subscribe()
         if realtime:  # every thread started from here on inherits it; the control loop goes higher still
             raise_thread_priority(WORKER_FIFO_PRIORITY)
         worker.start()
         description = worker.describe()  # after starting: it says which microphone and speaker were found
-    except Exception:
-        conn.send(("fatal", traceback.format_exc()))
+    except Exception as exc:
+        # the operator's own mistakes (a servo not answering, a bad robot.toml) are said plainly, without a trace
+        plain = type(exc).__name__ in ("BusError", "ConfigError")
+        conn.send(("fatal", f"{exc}" if plain else traceback.format_exc()))
         return
     send_lock = threading.Lock()
 
@@ -307,8 +332,8 @@ def child_main(
         while True:
             try:
                 message = conn.recv()
-            except (EOFError, OSError):  # the parent is gone: stop the robot safely
-                worker.submit(EStop(source="parent-lost"))
+            except (EOFError, OSError):  # the parent is gone: stop the robot safely (stop() waits out a real
+                worker.submit(EStop(source="parent-lost", reason="the web server is gone"))  # robot's crouch)
                 break
             if message[0] == "stop":
                 break

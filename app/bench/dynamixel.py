@@ -30,6 +30,7 @@ def _stats(values: list[float]) -> dict[str, float]:
 
 
 def _one_rate(baudrate: int, seconds: float, fast: bool) -> dict[str, Any]:
+    from robot.control.priority import raise_thread_priority
     from robot.hardware.bus import DynamixelBus
     from robot.hardware.bus_emulator import BusEmulator
     from robot.hardware.config import default_config
@@ -37,6 +38,7 @@ def _one_rate(baudrate: int, seconds: float, fast: bool) -> dict[str, Any]:
     config = dataclasses.replace(default_config(baudrate=baudrate), reply_margin_ms=20.0, fast_sync_read=fast)
     with BusEmulator([j.servo_id for j in config.joints], baudrate=baudrate, wire_time=True) as emulator:
         bus = DynamixelBus(dataclasses.replace(config, port=emulator.port_name))
+        raise_thread_priority()  # as the backend's control loop runs (real time where allowed)
         bus.open()
         try:
             bus.prepare()  # as the backend starts: no return delay

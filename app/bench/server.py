@@ -24,7 +24,9 @@ def free_port() -> int:
 class ServerProcess:
     """`with ServerProcess(workdir) as server:` gives a running app at `server.url`, stopped on exit."""
 
-    def __init__(self, workdir: Path, seed: int = 0, extra_env: dict[str, str] | None = None) -> None:
+    def __init__(self, workdir: Path, seed: int = 0, extra_env: dict[str, str] | None = None,
+                 servo_port: str | None = None) -> None:  # fmt: skip
+        """`servo_port`: serve the real robot (`--backend dynamixel`) on that serial device (or the emulator's)."""
         self.workdir = Path(workdir)
         self.port = free_port()
         self.viser_port = free_port()
@@ -32,6 +34,7 @@ class ServerProcess:
         self.replay_port = free_port()
         self.url = f"http://127.0.0.1:{self.port}"
         self.seed = seed
+        self.servo_port = servo_port
         self.log_path = self.workdir / "server.log"
         self._env = {
             **os.environ,
@@ -48,6 +51,8 @@ class ServerProcess:
         log = self.log_path.open("a")
         command = [sys.executable, "-m", "app.cli", "serve", "--port", str(self.port),
                    "--viser-port", str(self.viser_port), "--seed", str(self.seed)]  # fmt: skip
+        if self.servo_port:
+            command[4:6] = ["--backend", "dynamixel", "--port", self.servo_port, "--http-port", str(self.port)]
         self._process = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, env=self._env)
         deadline = time.monotonic() + STARTUP_TIMEOUT_S
         while time.monotonic() < deadline:
@@ -70,6 +75,11 @@ class ServerProcess:
             except subprocess.TimeoutExpired:
                 self._process.kill()
                 self._process.wait()
+
+    @property
+    def pid(self) -> int:
+        assert self._process is not None, "not started"
+        return self._process.pid
 
     def kill(self) -> None:
         """SIGKILL, as a crash: nothing gets to close or flush."""

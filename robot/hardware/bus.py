@@ -16,6 +16,7 @@ direction, offset and scale, and clamps every goal to the joint's limits before 
 from __future__ import annotations
 
 import logging
+import select
 import time
 from dataclasses import dataclass
 
@@ -58,6 +59,17 @@ class LowLatencyPortHandler(PortHandler):
     def setPacketTimeout(self, packet_length: int) -> None:  # the SDK names it
         self.packet_start_time = self.getCurrentTime()
         self.packet_timeout = self.tx_time_per_byte * packet_length + self.latency_timer_ms * 2.0 + self.reply_margin_ms
+
+    def readPort(self, length: int) -> bytes:
+        """The SDK polls a non-blocking port in a loop until the reply is in: at real-time priority that spin
+        takes a whole core and can starve the kernel threads that deliver the reply's bytes (the emulator's
+        pseudo-terminal, the USB serial driver under load), and trips the kernel's real-time throttling. Sleep
+        in select() until bytes come or the packet's time is up instead."""
+        if self.ser.in_waiting == 0:
+            remaining_ms = self.packet_timeout - (self.getCurrentTime() - self.packet_start_time)
+            if remaining_ms > 0:
+                select.select([self.ser.fileno()], [], [], remaining_ms / 1e3)
+        return self.ser.read(length)
 
 
 @dataclass(frozen=True)

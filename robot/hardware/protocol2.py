@@ -61,8 +61,8 @@ def _crc_table() -> list[int]:
 _TABLE = _crc_table()
 
 
-def crc16(data: bytes) -> int:
-    crc = 0
+def crc16(data: bytes, crc: int = 0) -> int:
+    """CRC-16 (IBM, polynomial 0x8005) of `data`, continuing from `crc` (the CRC of what came before it)."""
     for byte in data:
         crc = ((crc << 8) ^ _TABLE[((crc >> 8) ^ byte) & 0xFF]) & 0xFFFF
     return crc
@@ -108,10 +108,13 @@ def fast_sync_status(replies: list[tuple[int, int, bytes]]) -> bytes:
     `replies`: (error, servo ID, data) in the order the read asked for them."""
     length = 1 + sum(len(data) + 4 for _, _, data in replies)
     out = bytearray(HEADER + bytes([BROADCAST_ID, length & 0xFF, length >> 8, Instruction.STATUS]))
+    crc = crc16(bytes(out))
     for error, servo_id, data in replies:
-        out += bytes([error, servo_id]) + data
-        crc = crc16(bytes(out))
+        part = bytes([error, servo_id]) + data
+        crc = crc16(part, crc)  # each servo continues the CRC of the packet so far
+        out += part
         out += bytes([crc & 0xFF, crc >> 8])
+        crc = crc16(bytes([crc & 0xFF, crc >> 8]), crc)
     return bytes(out)
 
 

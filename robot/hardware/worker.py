@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from robot.control.posture import PostureController
+from robot.control.priority import raise_thread_priority
 from robot.control.stats import LoopStats
 from robot.diagnostics.robot_sources import RobotDiagnostics, RobotReadings
 from robot.diagnostics.thresholds import Thresholds
@@ -162,6 +163,11 @@ class HardwareWorker:
         self._diagnostics.start()
 
     def stop(self) -> None:
+        """With torque on, the controlled stop first (a robot told to shut down does not drop where it stands);
+        then torque off whatever happened."""
+        if self._torque and self.is_alive():
+            self.submit(EStop(source="shutdown", reason="the app is shutting down"))
+            self._board.wait_for(lambda s: not s.torque_enabled, self.estop_torque_off_s + 1.0)
         self._stop.set()
         if self._thread is not None:
             self._thread.join(timeout=2)
@@ -314,6 +320,9 @@ class HardwareWorker:
                 )
 
     def _control_loop(self) -> None:
+        priority = raise_thread_priority()
+        self._events.publish("control/priority", f"control loop at {self.control_hz:.0f} Hz with {priority}",
+                             Level.OK if priority.startswith("real-time") else Level.WARN)  # fmt: skip
         next_deadline = time.perf_counter() + self.dt
         self._stats.last_tick_end = time.perf_counter()
         while not self._stop.is_set():

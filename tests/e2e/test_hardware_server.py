@@ -1,0 +1,152 @@
+"""`humanoid serve --backend dynamixel --port <the emulator's pty>` as a process, driven from Chromium: the page's
+Torque button and its heartbeat (the deadman), the measured pose in the state the mirror draws, and the servos'
+own bus watchdog stopping them when the robot's process dies with torque on."""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import threading
+import time
+from collections.abc import Iterator
+
+import httpx
+import psutil
+import pytest
+
+from app.bench.browser import launch_chromium
+from app.bench.server import ServerProcess
+from robot.hardware import control_table as ct
+from robot.hardware.bus_emulator import BusEmulator
+from robot.hardware.config import default_config, save_config
+from robot.model.world import generate_world
+from robot.sim.backend import MujocoSimBackend
+
+pytestmark = pytest.mark.slow
+
+playwright_api = pytest.importorskip("playwright.sync_api")
+
+KNEE_ID, KNEE_AT_START = 13, 0.3  # r_knee, bent as it was left when powered down
+
+
+def wait_until(predicate, timeout: float = 10.0):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if value := predicate():
+            return value
+        time.sleep(0.05)
+    raise AssertionError("condition not met in time")
+
+
+def test_the_real_robot_from_the_page_torque_the_measured_pose_and_the_deadman(tmp_path) -> None:
+    config = default_config()
+    with BusEmulator([j.servo_id for j in config.joints], baudrate=2_000_000,
+                     positions={KNEE_ID: KNEE_AT_START}) as emulator:  # fmt: skip
+        robot_toml = tmp_path / "robot.toml"
+        # a slow test machine answers late: more margin than the 2 ms a real servo gets
+        save_config(dataclasses.replace(config, port=emulator.port_name, reply_margin_ms=100.0), robot_toml)
+        env = {"HUMANOID_ROBOT_CONFIG": str(robot_toml), "HUMANOID_DEADMAN_S": "1.0"}
+        with ServerProcess(tmp_path / "server", extra_env=env, servo_port=emulator.port_name) as server:
+            state = server.get("/api/state?qpos=true")
+            assert state["torque_enabled"] is False
+            scene = MujocoSimBackend(generate_world(0)).model
+            knee = scene.jnt_qposadr[scene.joint("r_knee").id]
+            assert state["qpos"][knee] == pytest.approx(KNEE_AT_START, abs=0.003)  # what the mirror draws
+
+            with playwright_api.sync_playwright() as playwright:
+                browser = launch_chromium(playwright)
+                page = browser.new_page()
+                page.goto(server.url)
+                torque = page.locator("#torque")
+                playwright_api.expect(torque).to_be_visible(timeout=20_000)
+                torque.click()
+                wait_until(lambda: server.get("/api/state")["torque_enabled"])
+                assert all(emulator.read(j.servo_id, ct.TORQUE_ENABLE) for j in config.joints)
+                time.sleep(2.5)  # longer than the deadman: the open page's heartbeat keeps torque on
+                state = server.get("/api/state")
+                events = [e["message"] for e in server.get("/api/events")][-8:]
+                assert state["torque_enabled"] and not state["estop_latched"], events
+                browser.close()  # the operator's page is gone
+
+            wait_until(lambda: server.get("/api/state")["estop_latched"], timeout=5)
+            stop = next(e for e in server.get("/api/events") if e["kind"] == "estop/latched")
+            assert stop["data"]["source"] == "deadman", [e["message"] for e in server.get("/api/events")][-12:]
+            wait_until(lambda: not server.get("/api/state")["torque_enabled"], timeout=8)  # crouch, then off
+            assert not any(emulator.read(j.servo_id, ct.TORQUE_ENABLE) for j in config.joints)
+
+
+@contextlib.contextmanager
+def hardware_server(tmp_path, emulator: BusEmulator) -> Iterator[ServerProcess]:
+    robot_toml = tmp_path / "robot.toml"
+    save_config(dataclasses.replace(default_config(), port=emulator.port_name, reply_margin_ms=100.0), robot_toml)
+    env = {"HUMANOID_ROBOT_CONFIG": str(robot_toml), "HUMANOID_DEADMAN_S": "1.0"}
+    with ServerProcess(tmp_path / "server", extra_env=env, servo_port=emulator.port_name) as server:
+        yield server
+
+
+@contextlib.contextmanager
+def script_heartbeat(server: ServerProcess) -> Iterator[None]:
+    """A script's deadman, as the page's: a heartbeat every 250 ms."""
+    beating = threading.Event()
+    beating.set()
+
+    def beat() -> None:
+        while beating.is_set():
+            with contextlib.suppress(httpx.HTTPError):
+                httpx.post(server.url + "/api/heartbeat", timeout=1.0)
+            time.sleep(0.25)
+
+    thread = threading.Thread(target=beat, daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        beating.clear()
+        thread.join(timeout=2)
+
+
+def robot_process(server: ServerProcess) -> psutil.Process:
+    """The robot worker's process: the server's child started by multiprocessing (not its resource tracker)."""
+    (worker,) = [p for p in psutil.Process(server.pid).children() if "spawn_main" in " ".join(p.cmdline())]
+    return worker
+
+
+def torque_on_by_script(server: ServerProcess, emulator: BusEmulator) -> None:
+    assert server.post("/api/torque", json={"enabled": True}).is_success
+    wait_until(lambda: server.get("/api/state")["torque_enabled"])
+    assert emulator.read(KNEE_ID, ct.BUS_WATCHDOG) == default_config().bus_watchdog_ms // ct.BUS_WATCHDOG_UNIT_MS
+
+
+def test_when_the_web_server_dies_the_robot_process_makes_the_controlled_stop(tmp_path) -> None:
+    config = default_config()
+    with (
+        BusEmulator([j.servo_id for j in config.joints], baudrate=2_000_000) as emulator,
+        hardware_server(tmp_path, emulator) as server,
+        script_heartbeat(server),
+    ):
+        torque_on_by_script(server, emulator)
+        worker = robot_process(server)
+        server.kill()  # SIGKILL: the web server cannot say anything
+        wait_until(lambda: emulator.read(14, ct.GOAL_POSITION) > ct.POSITION_CENTRE + 100)  # l_knee crouching
+        wait_until(lambda: not any(emulator.read(j.servo_id, ct.TORQUE_ENABLE) for j in config.joints), 8)
+        worker.wait(timeout=10)  # and then it exits (psutil.TimeoutExpired if not)
+
+
+def test_when_the_robot_process_dies_the_servos_bus_watchdog_stops_them(tmp_path) -> None:
+    config = default_config()
+    with (
+        BusEmulator([j.servo_id for j in config.joints], baudrate=2_000_000) as emulator,
+        hardware_server(tmp_path, emulator) as server,
+        script_heartbeat(server),
+    ):
+        torque_on_by_script(server, emulator)
+        worker = robot_process(server)
+        worker.kill()  # the control loop dies with it: nothing writes to the bus any more
+        time.sleep(0.3)
+        assert all(emulator.read(j.servo_id, ct.BUS_WATCHDOG) == -1 for j in config.joints)
+        assert all(emulator.read(j.servo_id, ct.TORQUE_ENABLE) for j in config.joints)  # holding, not limp
+        knee = emulator.position_rad(KNEE_ID)
+        time.sleep(0.2)
+        assert emulator.position_rad(KNEE_ID) == pytest.approx(knee, abs=1e-3)
+        health = httpx.get(server.url + "/api/health", timeout=5.0)  # the server says the robot is not driven
+        assert health.status_code == 503 and health.json()["status"] == "worker_down"
