@@ -6,6 +6,7 @@ import argparse
 import json
 import sys
 
+from app.auth.cli import add_users_parser
 from app.hardware_cli import add_hardware_parser
 from app.sessions.cli import add_sessions_parser
 from app.settings import Settings, get_settings
@@ -14,6 +15,7 @@ from app.settings import Settings, get_settings
 def _serve(args: argparse.Namespace, settings: Settings) -> int:
     import uvicorn
 
+    from app.auth.access import InsecureBind
     from app.main import create_app
     from app.sessions.db import upgrade_to_head
 
@@ -25,6 +27,11 @@ def _serve(args: argparse.Namespace, settings: Settings) -> int:
     if args.viser_port is not None:
         settings = settings.model_copy(update={"viser_port": args.viser_port})
     upgrade_to_head(settings.database_url)
+    try:  # said here plainly, before anything starts (Runtime.start checks again)
+        _access_control(settings).check_exposure()
+    except InsecureBind as exc:
+        print(f"humanoid serve: {exc}", file=sys.stderr)
+        return 2
     # Threads here (HTTP, WebSockets, the 3D mirror, the recorder) share one interpreter lock; a short switch
     # interval bounds how long the e-stop relay can wait for it behind a busy thread.
     sys.setswitchinterval(0.0005)
@@ -35,6 +42,15 @@ def _serve(args: argparse.Namespace, settings: Settings) -> int:
     )
     uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_level="warning", ws_max_size=65536)
     return 0
+
+
+def _access_control(settings: Settings):  # type: ignore[no-untyped-def]
+    from app.auth.access import AccessControl
+    from app.auth.store import UserStore
+    from app.sessions.db import make_engine, make_session_factory
+
+    return AccessControl(settings.auth, UserStore(make_session_factory(make_engine(settings.database_url))),
+                         settings.host)  # fmt: skip
 
 
 def _split_port(value: str | None) -> tuple[int | None, str | None]:
@@ -244,6 +260,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_sessions_parser(sub)
     add_hardware_parser(sub)
+    add_users_parser(sub)
 
     db = sub.add_parser("db", help="database maintenance")
     db_sub = db.add_subparsers(dest="db_command", required=True)

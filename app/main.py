@@ -11,7 +11,8 @@ from fastapi.responses import FileResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from app.api import diagnostics, perception, robot, sessions, speech
+from app.api import auth, diagnostics, perception, robot, sessions, speech
+from app.auth.middleware import AccessMiddleware
 from app.runtime import Runtime
 from app.settings import REPO_ROOT, Settings, get_settings
 from app.ws import router as ws_router
@@ -91,7 +92,10 @@ def create_app(settings: Settings | None = None, runtime: Runtime | None = None)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes,
                        larger={"/api/speech/transcribe": speech.MAX_AUDIO_BYTES,
                                sessions.IMPORT_PATH: settings.max_import_bytes})  # fmt: skip
+    app.add_middleware(AccessMiddleware, access=lambda: getattr(getattr(app.state, "runtime", None), "access", None),
+                       allowed_origins=settings.allowed_origins)  # fmt: skip
     app.add_exception_handler(RequestValidationError, _validation_error)
+    app.include_router(auth.router)
     app.include_router(robot.router)
     app.include_router(perception.router)
     app.include_router(sessions.router)
@@ -103,6 +107,10 @@ def create_app(settings: Settings | None = None, runtime: Runtime | None = None)
     @app.get("/", include_in_schema=False)
     def index() -> FileResponse:
         return FileResponse(STATIC_DIR / "index.html", headers={"Cache-Control": "no-cache"})
+
+    @app.get("/login", include_in_schema=False)
+    def login_page() -> FileResponse:
+        return FileResponse(STATIC_DIR / "login.html", headers={"Cache-Control": "no-cache"})
 
     @app.get("/sessions", include_in_schema=False)
     def sessions_page(request: Request) -> FileResponse:

@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from sqlalchemy import Engine
 from sqlalchemy.orm import sessionmaker
 
+from app.auth.access import AccessControl
+from app.auth.control import ControlLock
+from app.auth.store import UserStore
 from app.mirror import FULL, LIGHT, SceneMirror
 from app.replay import SessionReplay
 from app.sessions.db import make_engine, make_session_factory, upgrade_to_head
@@ -39,6 +42,8 @@ class Runtime:
     mirrors: dict[str, SceneMirror]  # by profile name: "full" and "light"
     replay: SessionReplay | None = None  # the stored sessions' 3D replay (with the mirrors)
     browser_clients: int = 0  # pages connected to /ws now
+    access: AccessControl | None = None  # None: as "off" (tests that build a Runtime by hand)
+    control: ControlLock = field(default_factory=ControlLock)  # the one operator in control
 
     @staticmethod
     def start(settings: Settings, worker: RobotPort | None = None) -> Runtime:
@@ -46,6 +51,8 @@ class Runtime:
         upgrade_to_head(settings.database_url)
         engine = make_engine(settings.database_url)
         db = make_session_factory(engine)
+        access = AccessControl(settings.auth, UserStore(db), settings.host)
+        access.check_exposure()  # before anything starts: no robot behind an open door
         close_interrupted_sessions(db)
         if worker is None and settings.backend == "dynamixel":
             spec = HardwareSpec(settings.hardware_config(), settings.deadman_s)
@@ -96,7 +103,7 @@ class Runtime:
                                                     profile=profile, shadows=settings.mirror_shadows)  # fmt: skip
                 mirrors[profile.name].start()
         replay = SessionReplay(db, settings.viser_host, settings.replay_port) if settings.enable_mirror else None
-        return Runtime(settings, worker, engine, db, recorder, mirrors, replay)
+        return Runtime(settings, worker, engine, db, recorder, mirrors, replay, access=access)
 
     def stop(self) -> None:
         for mirror in self.mirrors.values():

@@ -35,6 +35,12 @@ class Settings(BaseSettings):
     viser_host: str = Field("127.0.0.1", description="interface the viser server binds to")
     backend: Literal["sim", "dynamixel"] = Field("sim", description="sim (MuJoCo) or dynamixel (the real robot)")
     robot_config: str = Field(str(REPO_ROOT / "robot.toml"), description="the real robot's servos (see README)")
+    auth: Literal["auto", "on", "off"] = Field(
+        "auto", description="access control: auto (on once a user exists), on, or off (only on a loopback address)"
+    )
+    allowed_origins: list[str] = Field(
+        default_factory=list, description="other origins whose pages may use the API and WebSocket (CORS-like)"
+    )
     deadman_s: float = Field(
         1.5,
         ge=0,

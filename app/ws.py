@@ -9,6 +9,10 @@ is answered with {"type": "teleop_ack", ...}), {"type": "teleop_stop"}, {"type":
 {"type": "heartbeat"} (the page sends one every 250 ms: on the real robot torque stays on only while an operator
 heartbeats, see `OperatorHeartbeat`; not answered).
 A socket that drove the robot stops it when it closes: the browser's connection is part of the deadman.
+With access control on, anyone connected may press the e-stop and stop teleop; releasing the e-stop and driving
+need an operator in control (refused with {"type": "error", ...}), and a heartbeat counts only from the operator
+in control. {"type": "control", "control": {"holder": name | null, "since": t}} says who operates, when it
+changes.
 """
 
 from __future__ import annotations
@@ -21,6 +25,9 @@ from typing import Any
 
 from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 
+from app.api.auth import control_json
+from app.auth.control import ControlHeld
+from app.auth.roles import LOCAL_OPERATOR, Principal, Role
 from app.diagnostics import diagnostics_json, snapshot
 from app.runtime import Runtime
 from app.serialize import event_json, reply_json, state_json
@@ -45,7 +52,25 @@ def _number(message: dict[str, Any], key: str) -> float:
     return float(value)
 
 
-async def _receive(ws: WebSocket, rt: Runtime, drove: list[bool]) -> None:
+def _operator_refusal(rt: Runtime, who: Principal) -> str | None:
+    """Why `who` may not drive now (None: they may, and have control now)."""
+    if not who.role.allows(Role.OPERATOR):
+        return "viewers may watch and press the e-stop; this needs an operator"
+    try:
+        rt.control.ensure(who)
+    except ControlHeld as exc:
+        return str(exc)
+    return None
+
+
+def _counts_as_heartbeat(rt: Runtime, who: Principal) -> bool:
+    if rt.access is None or not rt.access.enabled:
+        return True
+    holder = rt.control.holder
+    return holder is not None and holder.name == who.name
+
+
+async def _receive(ws: WebSocket, rt: Runtime, drove: list[bool], who: Principal) -> None:
     while True:
         raw = await ws.receive_text()
         if len(raw) > MAX_MESSAGE_BYTES:
@@ -62,6 +87,9 @@ async def _receive(ws: WebSocket, rt: Runtime, drove: list[bool]) -> None:
             reply = rt.worker.submit(EStop(source="browser", client_time_s=_client_time(message), relayed_at_s=relayed))
             await ws.send_json({"type": "estop_ack", "server_time_s": time.time(), **reply_json(reply)})
         elif kind == "estop_release":
+            if refusal := _operator_refusal(rt, who):
+                await ws.send_json({"type": "estop_release_ack", "accepted": False, "message": refusal})
+                continue
             reply = rt.worker.submit(ReleaseEStop(source="browser"))
             await ws.send_json({"type": "estop_release_ack", **reply_json(reply)})
         elif kind == "teleop":
@@ -69,6 +97,9 @@ async def _receive(ws: WebSocket, rt: Runtime, drove: list[bool]) -> None:
                 velocity = (_number(message, "vx"), _number(message, "vy"), _number(message, "yaw_rate"))
             except ValueError as exc:
                 await ws.send_json({"type": "teleop_ack", "accepted": False, "message": str(exc)})
+                continue
+            if refusal := _operator_refusal(rt, who):
+                await ws.send_json({"type": "teleop_ack", "accepted": False, "message": refusal})
                 continue
             reply = rt.worker.submit(Teleop(*velocity, source="browser"))
             if reply.accepted:
@@ -78,7 +109,8 @@ async def _receive(ws: WebSocket, rt: Runtime, drove: list[bool]) -> None:
         elif kind == "teleop_stop":
             rt.worker.submit(StopTeleop(source="browser"))
         elif kind == "heartbeat":
-            rt.worker.submit(OperatorHeartbeat(source="browser"))
+            if _counts_as_heartbeat(rt, who):
+                rt.worker.submit(OperatorHeartbeat(source="browser"))
         elif kind == "ping":
             await ws.send_json({"type": "pong", "t": message.get("t"), "server_time_s": time.time()})
         else:
@@ -89,8 +121,12 @@ async def _send(ws: WebSocket, rt: Runtime) -> None:
     subscription = rt.worker.subscribe()
     period = 1.0 / rt.settings.ws_state_hz
     next_diagnostics = 0.0
+    control = None
     try:
         while True:
+            if (now := control_json(rt)) != control:
+                control = now
+                await ws.send_json({"type": "control", "control": control})
             while (event := subscription.get(timeout=0)) is not None:
                 await ws.send_json({"type": "event", "event": event_json(event)})
             await ws.send_json({"type": "state", "state": state_json(rt.worker.state())})
@@ -114,8 +150,9 @@ async def robot_socket(ws: WebSocket) -> None:
         }
     )
     drove = [False]  # whether this socket has driven the robot (then its closing stops it)
+    who = ws.scope.get("state", {}).get("principal") or LOCAL_OPERATOR  # (identified by the access middleware)
     rt.browser_clients += 1
-    tasks = [asyncio.create_task(_receive(ws, rt, drove)), asyncio.create_task(_send(ws, rt))]
+    tasks = [asyncio.create_task(_receive(ws, rt, drove, who)), asyncio.create_task(_send(ws, rt))]
     try:
         done, _ = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
         for task in done:

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
-from fastapi import HTTPException, Request
+from fastapi import Depends, HTTPException, Request
 
+from app.auth.control import ControlHeld
+from app.auth.roles import Principal, Role
 from app.runtime import Runtime
 from app.serialize import reply_json
 from robot.interface import CommandReply, Refusal
@@ -28,3 +30,28 @@ def raise_if_refused(reply: CommandReply) -> None:
     if not reply.accepted:
         assert reply.refusal is not None
         raise HTTPException(status_code=REFUSAL_STATUS[reply.refusal], detail=reply_json(reply))
+
+
+def principal(request: Request) -> Principal:
+    """Who sent the request (identified by the access middleware; the local operator when access control is
+    off)."""
+    who = getattr(request.state, "principal", None)
+    if who is None:
+        raise HTTPException(401, detail={"message": "log in first"})
+    return who
+
+
+def require_operator(request: Request) -> Principal:
+    """An operator, and the one in control (taking it if nobody has it): 403 for a viewer, 409 while another
+    operator has control."""
+    who = principal(request)
+    if not who.role.allows(Role.OPERATOR):
+        raise HTTPException(403, detail={"message": "viewers may watch and press the e-stop; this needs an operator"})
+    try:
+        runtime(request).control.ensure(who)
+    except ControlHeld as exc:
+        raise HTTPException(409, detail={"message": str(exc), "holder": exc.holder.name}) from exc
+    return who
+
+
+Operator = Depends(require_operator)

@@ -8,7 +8,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Depends, Response
 from pydantic import BaseModel, ConfigDict, Field
 
-from app.api.deps import raise_if_refused, runtime
+from app.api.deps import Operator, raise_if_refused, runtime
 from app.diagnostics import diagnostics_json, prometheus_text, snapshot
 from app.runtime import Runtime
 from app.serialize import reply_json
@@ -38,7 +38,7 @@ class FaultIn(BaseModel):
     value: float = Field(0.0, allow_inf_nan=False, ge=-200, le=200)
 
 
-@router.post("/api/sim/faults")
+@router.post("/api/sim/faults", dependencies=[Operator])
 def inject_fault(body: FaultIn, rt: RuntimeDep) -> dict[str, Any]:
     """Simulation: give the robot a fault (a servo overheating or jammed, the IMU lost, a sensor silent, the control
     loop hanging, a flat battery) or clear them all; 501 on hardware, 422 for an unknown servo."""

@@ -9,7 +9,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Depends, HTTPException, Response
 from pydantic import BaseModel, ConfigDict, Field
 
-from app.api.deps import raise_if_refused, runtime
+from app.api.deps import Operator, raise_if_refused, runtime
 from app.runtime import Runtime
 from app.serialize import event_json, reply_json, state_json
 from robot.interface import (
@@ -144,7 +144,7 @@ def events(rt: RuntimeDep) -> list[dict[str, Any]]:
     return [event_json(e) for e in rt.worker.recent_events()]
 
 
-@router.post("/commands", status_code=202)
+@router.post("/commands", status_code=202, dependencies=[Operator])
 def post_command(body: CommandIn, rt: RuntimeDep) -> dict[str, Any]:
     """Plan (or check the given plan) and start executing it. 422: not understood or invalid; 409: e-stop."""
     received = time.time()  # (recorded as when it came, before the plan made of it)
@@ -159,37 +159,37 @@ def post_command(body: CommandIn, rt: RuntimeDep) -> dict[str, Any]:
     return reply_json(reply)
 
 
-@router.post("/replan", status_code=202)
+@router.post("/replan", status_code=202, dependencies=[Operator])
 def replan(rt: RuntimeDep) -> dict[str, Any]:
     """Re-run the planner for the current command from the current state."""
     return _accepted(rt, Replan())
 
 
-@router.post("/plan/cancel")
+@router.post("/plan/cancel", dependencies=[Operator])
 def cancel_plan(rt: RuntimeDep) -> dict[str, Any]:
     """Stop the running plan, or reject the one awaiting approval; the robot stands where it is."""
     return reply_json(rt.worker.submit(CancelPlan()))
 
 
-@router.post("/plan/approve")
+@router.post("/plan/approve", dependencies=[Operator])
 def approve_plan(rt: RuntimeDep, body: ApproveIn | None = None) -> dict[str, Any]:
     """Run the plan awaiting approval. 409 when none awaits; 422 when `plan_id` is not the one that does."""
     return _accepted(rt, ApprovePlan((body or ApproveIn()).plan_id))
 
 
-@router.post("/plan/pause")
+@router.post("/plan/pause", dependencies=[Operator])
 def pause_plan(rt: RuntimeDep) -> dict[str, Any]:
     """Interrupt the running step and stand still; 409 when no plan runs."""
     return _accepted(rt, PausePlan())
 
 
-@router.post("/plan/resume")
+@router.post("/plan/resume", dependencies=[Operator])
 def resume_plan(rt: RuntimeDep) -> dict[str, Any]:
     """Run the paused step again (from the robot's state now) and go on; 409 when no plan is paused."""
     return _accepted(rt, ResumePlan())
 
 
-@router.put("/plan/approval")
+@router.put("/plan/approval", dependencies=[Operator])
 def set_approval(body: ApprovalIn, rt: RuntimeDep) -> dict[str, Any]:
     """Whether plans (automatic replans too) wait for the operator's approval before they run."""
     return reply_json(rt.worker.submit(SetApproval(body.required)))
@@ -205,13 +205,13 @@ def estop(rt: RuntimeDep, body: EStopIn | None = None) -> dict[str, Any]:
     )
 
 
-@router.post("/estop/reset")
+@router.post("/estop/reset", dependencies=[Operator])
 def estop_reset(rt: RuntimeDep) -> dict[str, Any]:
     """Release a latched e-stop. Never restarts motion: a new command or a replan does."""
     return _accepted(rt, ReleaseEStop(source="api"))
 
 
-@router.post("/teleop")
+@router.post("/teleop", dependencies=[Operator])
 def teleop(body: TeleopIn, rt: RuntimeDep) -> dict[str, Any]:
     """Drive the robot's velocity (409 while a plan runs, after a fall or under e-stop)."""
     return _accepted(rt, Teleop(body.vx, body.vy, body.yaw_rate, body.source))
@@ -223,7 +223,7 @@ def teleop_stop(rt: RuntimeDep) -> dict[str, Any]:
     return reply_json(rt.worker.submit(StopTeleop(source="api")))
 
 
-@router.post("/posture")
+@router.post("/posture", dependencies=[Operator])
 def posture(body: PostureIn, rt: RuntimeDep) -> dict[str, Any]:
     """Stand (the walk-ready stance) or crouch; 409 while walking, running a plan, or under e-stop."""
     return _accepted(rt, SetPosture(body.posture))
@@ -237,7 +237,7 @@ class ObstacleIn(BaseModel):
     y: float = Field(..., allow_inf_nan=False, ge=-50, le=50)
 
 
-@router.post("/sim/obstacles", status_code=202)
+@router.post("/sim/obstacles", status_code=202, dependencies=[Operator])
 def place_obstacle(body: ObstacleIn, rt: RuntimeDep) -> dict[str, Any]:
     """Simulation: drop an obstacle into the world (e.g. across the robot's path, to see it replan)."""
     return _accepted(rt, PlaceObstacle(body.x, body.y))
@@ -248,21 +248,21 @@ class TorqueIn(BaseModel):
     enabled: bool
 
 
-@router.post("/torque")
+@router.post("/torque", dependencies=[Operator])
 def torque(body: TorqueIn, rt: RuntimeDep) -> dict[str, Any]:
     """Real robot: every servo's torque on (it first holds where it stands) or off; 501 in simulation, 409 while
     the e-stop is latched."""
     return _accepted(rt, SetTorque(body.enabled, source="api"))
 
 
-@router.post("/heartbeat")
+@router.post("/heartbeat", dependencies=[Operator])
 def heartbeat(rt: RuntimeDep) -> dict[str, Any]:
     """The operator deadman for scripts (the page sends its own over the WebSocket): on the real robot, torque
     stays on only while a heartbeat comes at least every `HUMANOID_DEADMAN_S` (1.5 s)."""
     return _accepted(rt, OperatorHeartbeat(source="api"))
 
 
-@router.post("/reset")
+@router.post("/reset", dependencies=[Operator])
 def reset(rt: RuntimeDep) -> dict[str, Any]:
     """Simulation: put the robot back standing at its start pose (after a fall); 501 on hardware."""
     return _accepted(rt, ResetRobot())

@@ -13,7 +13,7 @@ from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import FileResponse
 from pydantic import BaseModel, ConfigDict, Field
 
-from app.api.deps import runtime
+from app.api.deps import Operator, runtime
 from app.replay import ReplayError
 from app.runtime import Runtime
 from app.sessions.archive import ArchiveError, export_session_json, import_session, read_archive
@@ -72,7 +72,7 @@ def get_session(session_id: int, rt: RuntimeDep) -> dict[str, Any]:
     return detail
 
 
-@router.delete("/sessions/{session_id}")
+@router.delete("/sessions/{session_id}", dependencies=[Operator])
 def delete_session(session_id: int, rt: RuntimeDep) -> dict[str, Any]:
     """Delete a session and everything recorded in it, its recordings included. The session being recorded now
     cannot be deleted (409)."""
@@ -148,7 +148,7 @@ async def export_session(session_id: int, rt: RuntimeDep, background: Background
     return FileResponse(path, media_type=media, filename=f"session-{session_id}.{format}", background=background)
 
 
-@router.post("/sessions/import", status_code=201)
+@router.post("/sessions/import", status_code=201, dependencies=[Operator])
 async def import_session_json(request: Request, rt: RuntimeDep) -> dict[str, Any]:
     """A session exported as JSON (by this API or `humanoid sessions export`) stored as a new session."""
     body = await request.body()

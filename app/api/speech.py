@@ -7,7 +7,7 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, HTTPException, Query, Request, Response
 
-from app.api.deps import runtime
+from app.api.deps import Operator, runtime
 from app.runtime import Runtime
 from app.sessions.audio_store import save_recording
 from robot.model.world import generate_world
@@ -37,7 +37,7 @@ def recognizer(rt: Runtime) -> SpeechRecognizer:
         return _recognizers[key]
 
 
-@router.post("/transcribe")
+@router.post("/transcribe", dependencies=[Operator])
 async def transcribe(request: Request, rt: RuntimeDep) -> dict[str, Any]:
     """The body is a WAV file, or raw 16-bit little-endian PCM (`Content-Type: audio/L16; rate=16000`, as the
     page's push-to-talk sends). 422 for audio that cannot be read; 503 when the engine cannot run."""

@@ -149,3 +149,7 @@ class CameraFrameRow(Base):
     height: Mapped[int] = mapped_column(Integer)
     jpeg: Mapped[bytes] = mapped_column(LargeBinary)
     detections: Mapped[list[dict[str, Any]] | None] = mapped_column(JSON)
+
+
+# The users' tables share this metadata (one database, one migration history): registered with it here.
+from app.auth import models as _auth_models  # noqa: E402, F401

@@ -66,6 +66,7 @@ function connect() {
     else if (m.type === "estop_release_ack" && !m.accepted) showResult(m.message, true);
     else if (m.type === "teleop_ack" && humanoid.onTeleopAck) humanoid.onTeleopAck(m);
     else if (m.type === "diagnostics" && humanoid.onDiagnostics) humanoid.onDiagnostics(m.diagnostics);
+    else if (m.type === "control" && humanoid.onControl) humanoid.onControl(m.control);
   };
 }
 
@@ -100,6 +101,7 @@ document.addEventListener("keydown", (ev) => {
 $("release").addEventListener("click", releaseEStop);
 
 // ---- commands ------------------------------------------------------------------------------------------------
+humanoid.showResult = (text, isError) => showResult(text, isError);
 function showResult(text, isError) {
   const el = $("command-result");
   el.textContent = text;
