@@ -26,6 +26,7 @@ from typing import Any
 from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 
 from app.api.auth import control_json
+from app.api.robot import TELEOP_MAX_SPEED_M_S, TELEOP_MAX_YAW_RATE
 from app.auth.control import ControlHeld
 from app.auth.roles import LOCAL_OPERATOR, Principal, Role
 from app.diagnostics import diagnostics_json, snapshot
@@ -45,10 +46,12 @@ def _client_time(message: dict[str, Any]) -> float | None:
     return None
 
 
-def _number(message: dict[str, Any], key: str) -> float:
+def _number(message: dict[str, Any], key: str, bound: float) -> float:
     value = message.get(key, 0.0)
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
         raise ValueError(f"{key} must be a finite number")
+    if abs(value) > bound:
+        raise ValueError(f"{key} {value:g} is beyond {bound:g}: refused")
     return float(value)
 
 
@@ -94,7 +97,8 @@ async def _receive(ws: WebSocket, rt: Runtime, drove: list[bool], who: Principal
             await ws.send_json({"type": "estop_release_ack", **reply_json(reply)})
         elif kind == "teleop":
             try:
-                velocity = (_number(message, "vx"), _number(message, "vy"), _number(message, "yaw_rate"))
+                velocity = (_number(message, "vx", TELEOP_MAX_SPEED_M_S), _number(message, "vy", TELEOP_MAX_SPEED_M_S),
+                            _number(message, "yaw_rate", TELEOP_MAX_YAW_RATE))  # fmt: skip
             except ValueError as exc:
                 await ws.send_json({"type": "teleop_ack", "accepted": False, "message": str(exc)})
                 continue

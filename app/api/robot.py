@@ -78,13 +78,27 @@ class EStopIn(BaseModel):
     )
 
 
+# Beyond these a velocity is a mistake, not a wish to walk fast: refused (below them, clipped to the walking limits).
+TELEOP_MAX_SPEED_M_S = 1.0
+TELEOP_MAX_YAW_RATE = 3.0
+
+
 class TeleopIn(BaseModel):
     """Velocity in the robot's frame. A deadman: repeat it at least every 300 ms, or the robot stops."""
 
     model_config = ConfigDict(extra="forbid")
-    vx: float = Field(0.0, allow_inf_nan=False, description="forward, m/s (clipped to the walking limits)")
-    vy: float = Field(0.0, allow_inf_nan=False, description="to the left, m/s")
-    yaw_rate: float = Field(0.0, allow_inf_nan=False, description="counter-clockwise, rad/s")
+    vx: float = Field(
+        0.0,
+        allow_inf_nan=False,
+        ge=-TELEOP_MAX_SPEED_M_S,
+        le=TELEOP_MAX_SPEED_M_S,
+        description="forward, m/s (clipped to the walking limits; beyond 1 m/s refused)",
+    )
+    vy: float = Field(
+        0.0, allow_inf_nan=False, ge=-TELEOP_MAX_SPEED_M_S, le=TELEOP_MAX_SPEED_M_S, description="to the left, m/s"
+    )
+    yaw_rate: float = Field(0.0, allow_inf_nan=False, ge=-TELEOP_MAX_YAW_RATE, le=TELEOP_MAX_YAW_RATE,
+                            description="counter-clockwise, rad/s (beyond 3 rad/s refused)")  # fmt: skip
     source: str = Field("api", max_length=16, pattern=r"^[a-z_-]+$")
 
 

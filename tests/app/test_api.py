@@ -178,6 +178,8 @@ def test_health_says_when_the_worker_is_down(client) -> None:
 def test_teleop_posture_and_reset_endpoints(client) -> None:
     assert client.post("/api/teleop", json={"vx": "nan"}).status_code == 422
     assert client.post("/api/teleop", json={"vx": 0.1, "spin": 1}).status_code == 422
+    assert client.post("/api/teleop", json={"vx": 1e6}).status_code == 422  # absurd: refused, not clipped
+    assert client.post("/api/teleop", json={"yaw_rate": -40.0}).status_code == 422
     reply = client.post("/api/teleop", json={"vx": 0.1, "source": "test"})
     assert reply.status_code == 200 and reply.json()["accepted"]
     worker = client.runtime.worker

@@ -49,6 +49,8 @@ def test_socket_teleop_drives_and_closing_the_socket_stops_the_robot(client) -> 
         ws.receive_json()
         ws.send_json({"type": "teleop", "vx": "fast"})
         assert "finite number" in receive_until(ws, lambda m: m["type"] == "teleop_ack")["message"]
+        ws.send_json({"type": "teleop", "vx": 250.0})
+        assert "refused" in receive_until(ws, lambda m: m["type"] == "teleop_ack")["message"]
         for _ in range(8):
             ws.send_json({"type": "teleop", "vx": 0.1, "vy": 0.0, "yaw_rate": 0.0})
             time.sleep(0.1)

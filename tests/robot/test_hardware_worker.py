@@ -188,25 +188,33 @@ def test_start_up_sets_the_servos_up_and_torque_arms_their_bus_watchdog(robot, e
     assert all(emulator.read(j.servo_id, ct.BUS_WATCHDOG) == CONFIG.bus_watchdog_ms // 20 for j in CONFIG.joints)
 
 
-def test_a_stalled_control_loop_is_stopped_by_the_servos_then_crouches_and_turns_torque_off(robot, emulator) -> None:
-    """The control loop hangs for 300 ms, past the servos' 100 ms bus watchdog: the servos stop where they are on
-    their own; when the loop comes back it takes that as a loss of control: e-stop, crouch, torque off."""
-    robot.submit(SetTorque(True))
-    wait(lambda: robot.state().torque_enabled)
-    real_read = robot.bus.read
-    stalls = [0.3]
+def test_a_stalled_control_loop_is_stopped_by_the_servos_then_crouches_and_turns_torque_off(emulator, layout) -> None:
+    """The control loop hangs for 300 ms, past the servos' bus watchdog (set to 100 ms here): the servos stop
+    where they are on their own; when the loop comes back it takes that as a loss of control: e-stop, crouch,
+    torque off."""
+    config = dataclasses.replace(CONFIG, port=emulator.port_name, bus_watchdog_ms=100)
+    robot = HardwareWorker(config, layout, estop_torque_off_s=1.0, deadman_s=0.0)
+    robot.start()
+    try:
+        robot.submit(SetTorque(True))
+        wait(lambda: robot.state().torque_enabled)
+        assert emulator.read(sid("r_knee"), ct.BUS_WATCHDOG) == 5
+        real_read = robot.bus.read
+        stalls = [0.3]
 
-    def stalling_read():
-        if stalls:
-            time.sleep(stalls.pop())
-        return real_read()
+        def stalling_read():
+            if stalls:
+                time.sleep(stalls.pop())
+            return real_read()
 
-    robot.bus.read = stalling_read
-    tripped = wait(lambda: next((e for e in robot.recent_events() if e.kind == "hardware/watchdog"), None))
-    assert len(tripped.data["joints"]) == len(CONFIG.joints) and tripped.data["gap_ms"] >= 250
-    assert robot.state().estop_latched
-    latched = next(e for e in robot.recent_events() if e.kind == "estop/latched")
-    assert latched.data["source"] == "watchdog" and "stalled" in latched.data["reason"]
-    wait(lambda: emulator.read(sid("l_knee"), ct.GOAL_POSITION) > ct.POSITION_CENTRE + 100)  # crouching again
-    wait(lambda: not robot.state().torque_enabled, timeout=4)
-    assert not any(torque_on(emulator))
+        robot.bus.read = stalling_read
+        tripped = wait(lambda: next((e for e in robot.recent_events() if e.kind == "hardware/watchdog"), None))
+        assert len(tripped.data["joints"]) == len(CONFIG.joints) and tripped.data["gap_ms"] >= 250
+        wait(lambda: robot.state().estop_latched)  # (the state is published at the end of the tick)
+        latched = next(e for e in robot.recent_events() if e.kind == "estop/latched")
+        assert latched.data["source"] == "watchdog" and "stalled" in latched.data["reason"]
+        wait(lambda: emulator.read(sid("l_knee"), ct.GOAL_POSITION) > ct.POSITION_CENTRE + 100)  # crouching again
+        wait(lambda: not robot.state().torque_enabled, timeout=4)
+        assert not any(torque_on(emulator))
+    finally:
+        robot.stop()
