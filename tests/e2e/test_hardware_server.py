@@ -117,7 +117,10 @@ def torque_on_by_script(server: ServerProcess, emulator: BusEmulator) -> None:
     assert emulator.read(KNEE_ID, ct.BUS_WATCHDOG) == default_config().bus_watchdog_ms // ct.BUS_WATCHDOG_UNIT_MS
 
 
-def test_when_the_web_server_dies_the_robot_process_makes_the_controlled_stop(tmp_path) -> None:
+@pytest.fixture
+def torque_on(tmp_path) -> Iterator[tuple[BusEmulator, ServerProcess, psutil.Process]]:
+    """The real-robot server on the emulator, torque on and a script heartbeating: (emulator, server, the robot
+    worker's process)."""
     config = default_config()
     with (
         BusEmulator([j.servo_id for j in config.joints], baudrate=2_000_000) as emulator,
@@ -125,27 +128,26 @@ def test_when_the_web_server_dies_the_robot_process_makes_the_controlled_stop(tm
         script_heartbeat(server),
     ):
         torque_on_by_script(server, emulator)
-        worker = robot_process(server)
-        server.kill()  # SIGKILL: the web server cannot say anything
-        wait_until(lambda: emulator.read(14, ct.GOAL_POSITION) > ct.POSITION_CENTRE + 100)  # l_knee crouching
-        wait_until(lambda: not any(emulator.read(j.servo_id, ct.TORQUE_ENABLE) for j in config.joints), 8)
-        worker.wait(timeout=10)  # and then it exits (psutil.TimeoutExpired if not)
+        yield emulator, server, robot_process(server)
 
 
-def test_when_the_robot_process_dies_the_servos_bus_watchdog_stops_them(tmp_path) -> None:
+def test_when_the_web_server_dies_the_robot_process_makes_the_controlled_stop(torque_on) -> None:
+    emulator, server, worker = torque_on
     config = default_config()
-    with (
-        BusEmulator([j.servo_id for j in config.joints], baudrate=2_000_000) as emulator,
-        hardware_server(tmp_path, emulator) as server,
-        script_heartbeat(server),
-    ):
-        torque_on_by_script(server, emulator)
-        worker = robot_process(server)
-        worker.kill()  # the control loop dies with it: nothing writes to the bus any more
-        wait_until(lambda: all(emulator.read(j.servo_id, ct.BUS_WATCHDOG) == -1 for j in config.joints), 3)
-        assert all(emulator.read(j.servo_id, ct.TORQUE_ENABLE) for j in config.joints)  # holding, not limp
-        knee = emulator.position_rad(KNEE_ID)
-        time.sleep(0.2)
-        assert emulator.position_rad(KNEE_ID) == pytest.approx(knee, abs=1e-3)
-        health = httpx.get(server.url + "/api/health", timeout=5.0)  # the server says the robot is not driven
-        assert health.status_code == 503 and health.json()["status"] == "worker_down"
+    server.kill()  # SIGKILL: the web server cannot say anything
+    wait_until(lambda: emulator.read(14, ct.GOAL_POSITION) > ct.POSITION_CENTRE + 100)  # l_knee crouching
+    wait_until(lambda: not any(emulator.read(j.servo_id, ct.TORQUE_ENABLE) for j in config.joints), 8)
+    worker.wait(timeout=10)  # and then it exits (psutil.TimeoutExpired if not)
+
+
+def test_when_the_robot_process_dies_the_servos_bus_watchdog_stops_them(torque_on) -> None:
+    emulator, server, worker = torque_on
+    config = default_config()
+    worker.kill()  # the control loop dies with it: nothing writes to the bus any more
+    wait_until(lambda: all(emulator.read(j.servo_id, ct.BUS_WATCHDOG) == -1 for j in config.joints), 3)
+    assert all(emulator.read(j.servo_id, ct.TORQUE_ENABLE) for j in config.joints)  # holding, not limp
+    knee = emulator.position_rad(KNEE_ID)
+    time.sleep(0.2)
+    assert emulator.position_rad(KNEE_ID) == pytest.approx(knee, abs=1e-3)
+    health = httpx.get(server.url + "/api/health", timeout=5.0)  # the server says the robot is not driven
+    assert health.status_code == 503 and health.json()["status"] == "worker_down"
