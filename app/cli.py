@@ -40,7 +40,10 @@ def _serve(args: argparse.Namespace, settings: Settings) -> int:
         f"  3D views on ports {settings.viser_port} (full) and {settings.viser_light_port} (light); "
         f"session replay on {settings.replay_port}"
     )
-    uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_level="warning", ws_max_size=65536)
+    # No per-message compression: deflating each page's copy of each state cost ~12 % of this process's interpreter
+    # lock with 20 pages (`humanoid bench load`); the e-stop waits behind whatever holds that lock.
+    uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_level="warning", ws_max_size=65536,
+                ws_per_message_deflate=False)  # fmt: skip
     return 0
 
 
@@ -267,12 +270,24 @@ def build_parser() -> argparse.ArgumentParser:
     db_sub.add_parser("upgrade", help="apply pending migrations").set_defaults(func=_db)
 
     bench = sub.add_parser("bench", help="benchmarks, written as JSON")
-    suites = ["core", "walk", "perception", "capstone", "planner", "voice", "sessions", "diagnostics", "dynamixel"]
+    suites = [
+        "core",
+        "load",
+        "walk",
+        "perception",
+        "capstone",
+        "planner",
+        "voice",
+        "sessions",
+        "diagnostics",
+        "dynamixel",
+    ]
     bench.add_argument("suite", choices=suites)
     bench.add_argument("--json", action="store_true", help="print the JSON result")
     bench.add_argument("--output", default=None, help="also write the JSON result to this file")
     bench.add_argument("--presses", type=int, default=100, help="e-stop presses to time")
-    bench.add_argument("--viewers", type=int, default=2, help="browser pages with the 3D view open")
+    bench.add_argument("--viewers", type=int, default=None,
+                       help="core: browser pages with the 3D view open (2); load: viewers connected (20)")  # fmt: skip
     bench.add_argument(
         "--duration",
         type=float,

@@ -40,6 +40,20 @@ def snapshot(rt: Runtime) -> DiagnosticArray:
     )
 
 
+def _worker_status(rt: Runtime) -> DiagnosticStatus:
+    sup = rt.supervisor
+    values: tuple[tuple[str, float | str], ...] = ()
+    if sup is not None:
+        values = (("restarts", sup.restarts), ("last_death", sup.last_death or ""))
+    if rt.worker.is_alive():
+        restarted = f"; restarted {sup.restarts} times (last death: {sup.last_death})" if sup and sup.restarts else ""
+        return DiagnosticStatus("links/robot_worker", Level.OK, "running" + restarted, values=values)
+    message = "the robot worker is not running: the robot is not driven"
+    if sup is not None:
+        message = sup.gave_up or message + "; the supervisor is restarting it"
+    return DiagnosticStatus("links/robot_worker", Level.ERROR, message, values=values)
+
+
 def _stale(status: DiagnosticStatus, age_s: float) -> DiagnosticStatus:
     return DiagnosticStatus(
         status.name,
@@ -56,14 +70,7 @@ def server_statuses(rt: Runtime) -> list[DiagnosticStatus]:
             "links/browsers", Level.OK, f"{rt.browser_clients} connected", values=(("clients", rt.browser_clients),)
         ),
     ]
-    if rt.worker.is_alive():
-        out.append(DiagnosticStatus("links/robot_worker", Level.OK, "running"))
-    else:
-        out.append(
-            DiagnosticStatus(
-                "links/robot_worker", Level.ERROR, "the robot worker is not running: the robot is not driven"
-            )
-        )
+    out.append(_worker_status(rt))
     out.append(_store_status(rt))
     out.append(_browser_asr_status(rt))
     return out

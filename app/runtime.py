@@ -11,12 +11,14 @@ from sqlalchemy.orm import sessionmaker
 from app.auth.access import AccessControl
 from app.auth.control import ControlLock
 from app.auth.store import UserStore
-from app.mirror import FULL, LIGHT, SceneMirror
+from app.mirror import FULL, LIGHT, PROFILES, SceneMirror
+from app.mirror_process import MirrorProcess, RemoteMirror
 from app.replay import SessionReplay
 from app.sessions.db import make_engine, make_session_factory, upgrade_to_head
 from app.sessions.maintenance import apply_retention, close_interrupted_sessions
 from app.sessions.recorder import SessionRecorder
 from app.settings import Settings
+from app.supervisor import WorkerSupervisor
 from robot.interface import RobotPort
 from robot.model.world import generate_world
 from robot.process import HardwareSpec, WorkerProcess
@@ -32,6 +34,14 @@ def _maintain(db: sessionmaker, settings: Settings, live_session_id: int) -> Non
                     keep={live_session_id})  # fmt: skip
 
 
+def _open_recorder(db: sessionmaker, worker: RobotPort, settings: Settings) -> SessionRecorder:
+    recorder = SessionRecorder(db, worker, kind="serve", seed=settings.seed, backend=settings.backend,
+                               audio_dir=settings.audio_dir, camera_hz=settings.record_camera_hz,
+                               camera_width=settings.record_camera_width,
+                               maintenance=lambda: _maintain(db, settings, recorder.session_id))  # fmt: skip
+    return recorder
+
+
 @dataclass
 class Runtime:
     settings: Settings
@@ -39,11 +49,13 @@ class Runtime:
     engine: Engine
     db: sessionmaker
     recorder: SessionRecorder
-    mirrors: dict[str, SceneMirror]  # by profile name: "full" and "light"
+    mirrors: dict[str, SceneMirror | RemoteMirror]  # by profile name: "full" and "light"
     replay: SessionReplay | None = None  # the stored sessions' 3D replay (with the mirrors)
     browser_clients: int = 0  # pages connected to /ws now
     access: AccessControl | None = None  # None: as "off" (tests that build a Runtime by hand)
     control: ControlLock = field(default_factory=ControlLock)  # the one operator in control
+    supervisor: WorkerSupervisor | None = None  # restarts a robot process that died
+    mirror_process: MirrorProcess | None = None  # the 3D mirrors, when they run in their own process
 
     @staticmethod
     def start(settings: Settings, worker: RobotPort | None = None) -> Runtime:
@@ -92,22 +104,43 @@ class Runtime:
                 )
             )
         worker.start()
-        recorder = SessionRecorder(db, worker, kind="serve", seed=settings.seed, backend=settings.backend,
-                                   audio_dir=settings.audio_dir, camera_hz=settings.record_camera_hz,
-                                   camera_width=settings.record_camera_width,
-                                   maintenance=lambda: _maintain(db, settings, recorder.session_id))  # fmt: skip
-        mirrors = {}
-        if settings.enable_mirror:
-            for profile, viser_port in ((FULL, settings.viser_port), (LIGHT, settings.viser_light_port)):
-                mirrors[profile.name] = SceneMirror(worker, settings.viser_host, viser_port, settings.mirror_hz,
-                                                    profile=profile, shadows=settings.mirror_shadows)  # fmt: skip
-                mirrors[profile.name].start()
+        recorder = _open_recorder(db, worker, settings)
+        mirrors: dict[str, SceneMirror | RemoteMirror] = {}
+        mirror_process = None
+        ports = {FULL.name: settings.viser_port, LIGHT.name: settings.viser_light_port}
+        if settings.enable_mirror and isinstance(worker, WorkerProcess):  # (the robot's messages feed it directly)
+            mirror_process = MirrorProcess(worker, settings.viser_host, ports, settings.mirror_hz,
+                                           settings.mirror_shadows)  # fmt: skip
+            mirror_process.start()
+            mirrors.update(mirror_process.mirrors)
+        elif settings.enable_mirror:
+            for name, viser_port in ports.items():
+                mirrors[name] = SceneMirror(worker, settings.viser_host, viser_port, settings.mirror_hz,
+                                            profile=PROFILES[name], shadows=settings.mirror_shadows)  # fmt: skip
+                mirrors[name].start()
         replay = SessionReplay(db, settings.viser_host, settings.replay_port) if settings.enable_mirror else None
-        return Runtime(settings, worker, engine, db, recorder, mirrors, replay, access=access)
+        rt = Runtime(settings, worker, engine, db, recorder, mirrors, replay, access=access,
+                     mirror_process=mirror_process)  # fmt: skip
+        if settings.supervise_worker and isinstance(worker, WorkerProcess):
+            rt.supervisor = WorkerSupervisor(worker, on_death=rt._session_crashed, on_restart=rt._new_session)
+            rt.supervisor.start()
+        return rt
+
+    def _session_crashed(self, why: str) -> None:
+        """The robot process died: its session ends with all it had kept, as "crashed"."""
+        self.recorder.close(outcome="crashed", summary={"cause": f"the robot process died ({why})"})
+
+    def _new_session(self) -> None:
+        """The restarted robot's life is a new session (its clock starts again)."""
+        self.recorder = _open_recorder(self.db, self.worker, self.settings)
 
     def stop(self) -> None:
+        if self.supervisor is not None:
+            self.supervisor.stop()
         for mirror in self.mirrors.values():
             mirror.stop()
+        if self.mirror_process is not None:
+            self.mirror_process.stop()
         if self.replay is not None:
             self.replay.stop()
         self.worker.stop()

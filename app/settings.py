@@ -60,6 +60,9 @@ class Settings(BaseSettings):
     )
     mirror_shadows: bool = Field(False, description="shadows in the 3D view (costly where WebGL runs in software)")
     worker_process: bool = Field(True, description="run the robot worker in its own process (keeps its loop on time)")
+    supervise_worker: bool = Field(
+        True, description="restart a robot process that dies (e-stop latched, a new session); 3 times in 5 min at most"
+    )
     perception: bool = Field(True, description="head camera, detection, lidar and map (about 25 % of one core)")
 
     # planning: which planner turns commands into plans, and how the executor recovers
@@ -84,6 +87,9 @@ class Settings(BaseSettings):
     # speech
     asr_engine: Literal["pocketsphinx", "whisper"] = Field("pocketsphinx", description="speech recogniser")
     whisper_model_dir: str = Field("", description="a faster-whisper (CTranslate2) model directory")
+    asr_timeout_s: float = Field(
+        15.0, gt=0, le=120, description="the page's recordings: a recogniser that takes longer is stopped (503)"
+    )
     audio_dir: str = Field(str(REPO_ROOT / "data" / "audio"), description="where recordings are kept, by session")
     microphone: str = Field("auto", description='the robot\'s microphone: "auto" (default input), "off", or a name')
     speaker: str = Field("auto", description='the robot\'s speaker: "auto" (default output), "off", or a name')

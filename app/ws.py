@@ -25,18 +25,16 @@ from typing import Any
 
 from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 
-from app.api.auth import control_json
 from app.api.robot import TELEOP_MAX_SPEED_M_S, TELEOP_MAX_YAW_RATE
 from app.auth.control import ControlHeld
 from app.auth.roles import LOCAL_OPERATOR, Principal, Role
-from app.diagnostics import diagnostics_json, snapshot
+from app.browser_feed import BrowserFeed
 from app.runtime import Runtime
-from app.serialize import event_json, reply_json, state_json
+from app.serialize import event_json, reply_json
 from robot.interface import EStop, OperatorHeartbeat, ReleaseEStop, StopTeleop, Teleop
 
 router = APIRouter()
 MAX_MESSAGE_BYTES = 4096
-DIAGNOSTICS_PERIOD_S = 1.0
 
 
 def _client_time(message: dict[str, Any]) -> float | None:
@@ -121,25 +119,32 @@ async def _receive(ws: WebSocket, rt: Runtime, drove: list[bool], who: Principal
             await ws.send_json({"type": "error", "message": f"unknown message type {kind!r}"})
 
 
-async def _send(ws: WebSocket, rt: Runtime) -> None:
+async def _send(ws: WebSocket, rt: Runtime, feed: BrowserFeed) -> None:
+    """The feed's texts (encoded once for every page) and this page's own events, at the feed's rate. A page that
+    reads slowly skips states, it never queues them."""
     subscription = rt.worker.subscribe()
-    period = 1.0 / rt.settings.ws_state_hz
-    next_diagnostics = 0.0
-    control = None
+    seen = diagnostics_seen = control_seen = 0
     try:
         while True:
-            if (now := control_json(rt)) != control:
-                control = now
-                await ws.send_json({"type": "control", "control": control})
+            if feed.control_version != control_seen:
+                control_seen = feed.control_version
+                await ws.send_text(feed.control)
             while (event := subscription.get(timeout=0)) is not None:
                 await ws.send_json({"type": "event", "event": event_json(event)})
-            await ws.send_json({"type": "state", "state": state_json(rt.worker.state())})
-            if time.monotonic() >= next_diagnostics:  # once a second, as they are sampled
-                next_diagnostics = time.monotonic() + DIAGNOSTICS_PERIOD_S
-                await ws.send_json({"type": "diagnostics", "diagnostics": diagnostics_json(snapshot(rt))})
-            await asyncio.sleep(period)
+            await ws.send_text(feed.state)
+            if feed.diagnostics_version != diagnostics_seen:  # once a second, as they are sampled
+                diagnostics_seen = feed.diagnostics_version
+                await ws.send_text(feed.diagnostics)
+            seen = await feed.next(seen)
     finally:
         subscription.close()
+
+
+def _feed(ws: WebSocket, rt: Runtime) -> BrowserFeed:
+    feed = getattr(ws.app.state, "browser_feed", None)
+    if feed is None:
+        feed = ws.app.state.browser_feed = BrowserFeed(rt, rt.settings.ws_state_hz)
+    return feed
 
 
 @router.websocket("/ws")
@@ -156,7 +161,9 @@ async def robot_socket(ws: WebSocket) -> None:
     drove = [False]  # whether this socket has driven the robot (then its closing stops it)
     who = ws.scope.get("state", {}).get("principal") or LOCAL_OPERATOR  # (identified by the access middleware)
     rt.browser_clients += 1
-    tasks = [asyncio.create_task(_receive(ws, rt, drove, who)), asyncio.create_task(_send(ws, rt))]
+    feed = _feed(ws, rt)
+    feed.join()
+    tasks = [asyncio.create_task(_receive(ws, rt, drove, who)), asyncio.create_task(_send(ws, rt, feed))]
     try:
         done, _ = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
         for task in done:
@@ -166,6 +173,7 @@ async def robot_socket(ws: WebSocket) -> None:
         pass
     finally:
         rt.browser_clients -= 1
+        feed.leave()
         for task in tasks:
             task.cancel()
         if drove[0]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import itertools
 import queue
 import threading
@@ -59,13 +60,23 @@ class EventBus:
             subscriber.put(event)
         return event
 
-    def forward(self, event: Event) -> None:
-        """Re-publish an event that was numbered elsewhere (e.g. by the worker in its own process)."""
+    def forward(self, event: Event, renumber: bool = False) -> Event:
+        """Re-publish an event that was made elsewhere (e.g. by the worker in its own process). `renumber`: give it
+        this bus's next number (a restarted producer numbers from 1 again; subscribers must never see a number
+        twice)."""
         with self._lock:
+            if renumber:
+                event = dataclasses.replace(event, seq=next(self._seq))
             self._history.append(event)
             subscribers = list(self._subscribers)
         for subscriber in subscribers:
             subscriber.put(event)
+        return event
+
+    def clear_history(self) -> None:
+        """Late joiners from now on start from here (a new session after a restart does not inherit the old one's)."""
+        with self._lock:
+            self._history.clear()
 
     def subscribe(self) -> Subscription:
         subscription = Subscription(self)

@@ -237,6 +237,8 @@ class Fault(StrEnum):
     LIDAR_STALE = "lidar_stale"  # no more lidar scans
     CONTROL_STALL = "control_stall"  # the control loop hangs for `value` seconds, once
     BATTERY_SOC = "battery_soc"  # the pack's state of charge set to `value` (0..1)
+    SIM_DIVERGE = "sim_diverge"  # the physics blows up (a velocity no simulation survives)
+    CONTROL_ERROR = "control_error"  # the control tick raises for `value` ticks, as a controller bug would
     CLEAR = "clear"  # every injected fault removed (a hot servo still has to cool down)
 
 

@@ -13,9 +13,11 @@ Wire protocol over one duplex pipe (pickled tuples):
 
 from __future__ import annotations
 
+import gc
 import itertools
 import logging
 import multiprocessing as mp
+import pickle
 import threading
 import traceback
 from collections.abc import Callable
@@ -37,6 +39,7 @@ from robot.interface import (
     EStop,
     Event,
     InjectFault,
+    Level,
     OperatorHeartbeat,
     PausePlan,
     PlaceObstacle,
@@ -60,7 +63,9 @@ from robot.telemetry import TelemetryBatch, TelemetryRing
 
 log = logging.getLogger(__name__)
 
-STATE_PERIOD_S = 0.01  # state snapshots sent to the parent at up to 100 Hz
+# State snapshots sent to the parent at up to 50 Hz: its readers (the 3D mirror at 30 Hz, pages at 20 Hz) need no
+# more, and each one costs the web server's interpreter lock time to unpickle.
+STATE_PERIOD_S = 0.02
 # Planning may take a while (an LLM's timeout, then a repair, then the rules); the e-stop never waits behind it.
 REPLY_TIMEOUT_S = 90.0
 STARTUP_TIMEOUT_S = 180.0
@@ -105,7 +110,7 @@ class WorkerProcess:
         self._perception = perception
         self._control_hz = control_hz
         self._realtime = realtime
-        self._bus = EventBus()
+        self._bus = EventBus(sim_clock=self._sim_time)
         self._ids = itertools.count(1)
         self._pending: dict[int, Future[CommandReply]] = {}
         self._pending_lock = threading.Lock()
@@ -119,6 +124,7 @@ class WorkerProcess:
         self._conn: Connection | None = None
         self._reader: threading.Thread | None = None
         self._alive = False
+        self._taps: list[Callable[[bytes], None]] = []
 
     # lifecycle -------------------------------------------------------------------------------------------------
 
@@ -162,6 +168,43 @@ class WorkerProcess:
         self._alive = True
         self._reader = threading.Thread(target=self._read, name="robot-worker-reader", daemon=True)
         self._reader.start()
+
+    def restart(self) -> None:
+        """A new robot process in place of a dead one (or one that is killed first), behind this same proxy: its
+        subscribers, the mirror and the recorder keep their handles. The new robot starts as at start-up; what the
+        old one published stays with whoever consumed it, and late joiners start from the new robot."""
+        if self._process is not None and self._process.is_alive():
+            self._process.kill()
+        if self._process is not None:
+            self._process.join(timeout=5)
+        if self._reader is not None:
+            self._reader.join(timeout=2)
+        self._process = None
+        self._alive = False
+        self._bus.clear_history()
+        self._telemetry = TelemetryRing()  # the new robot numbers its samples from 0 again
+        self._feed = SensorFeed()
+        self._diagnostics = None
+        self.start()
+
+    def _sim_time(self) -> float:
+        try:
+            return self._board.latest().sim_time_s
+        except RuntimeError:
+            return 0.0
+
+    def announce(self, kind: str, message: str, level: Level = Level.OK, **data: Any) -> Event:
+        """An event about the robot process itself (it died, it was restarted), numbered with the robot's own."""
+        return self._bus.publish(kind, message, level, **data)
+
+    @property
+    def pid(self) -> int | None:
+        return self._process.pid if self._process is not None else None
+
+    @property
+    def exitcode(self) -> int | None:
+        """The robot process's exit code once it has ended (negative: killed by that signal)."""
+        return self._process.exitcode if self._process is not None else None
 
     def stop(self) -> None:
         if self._process is None:
@@ -230,29 +273,34 @@ class WorkerProcess:
 
     # internals -------------------------------------------------------------------------------------------------
 
+    def add_tap(self, tap: Callable[[bytes], None]) -> None:
+        """`tap(raw)` gets every state and sensor-feed message as it came from the robot process, still pickled
+        (another process, the 3D mirror's, reads them without this one encoding them again). Called on the reader
+        thread: it must not block."""
+        self._taps.append(tap)
+
     def _read(self) -> None:
         assert self._conn is not None
         while True:
             try:
-                message = self._conn.recv()
+                raw = self._conn.recv_bytes()
             except (EOFError, OSError):
                 break
+            message = pickle.loads(raw)
             kind = message[0]
+            if kind in ("state", "feed"):
+                for tap in self._taps:
+                    tap(raw)
             if kind == "state":
                 self._board.publish(message[1])
-            elif kind == "event":
-                self._bus.forward(message[1])
+            elif kind == "event":  # numbered here: a restarted robot numbers from 1 again
+                self._bus.forward(message[1], renumber=True)
             elif kind == "telemetry":
                 self._telemetry.extend(message[1])
             elif kind == "diagnostics":
                 self._diagnostics = message[1]
             elif kind == "feed":
-                changed: SensorFeed = message[1]
-                self._feed = SensorFeed(
-                    camera=changed.camera or self._feed.camera,
-                    scan=changed.scan or self._feed.scan,
-                    map=changed.map or self._feed.map,
-                )
+                self._feed = merge_feed(self._feed, message[1])
             elif kind == "reply":
                 with self._pending_lock:
                     future = self._pending.get(message[1])
@@ -263,6 +311,12 @@ class WorkerProcess:
             for future in self._pending.values():
                 if not future.done():
                     future.set_result(CommandReply(False, "the robot worker exited", Refusal.UNAVAILABLE))
+
+
+def merge_feed(current: SensorFeed, changed: SensorFeed) -> SensorFeed:
+    """A feed message carries only the sensors that have something new."""
+    return SensorFeed(camera=changed.camera or current.camera, scan=changed.scan or current.scan,
+                      map=changed.map or current.map)  # fmt: skip
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -315,6 +369,10 @@ def child_main(
         with send_lock:
             conn.send(message)
 
+    # Built at start-up and kept (the model, the scene, the planners): set aside from the garbage collector, whose
+    # full collections would otherwise scan it all with the control loop stopped.
+    gc.collect()
+    gc.freeze()
     send(("ready", description, worker.state()))
     stop = threading.Event()
     outbox = threading.Thread(target=_forward_state_and_events, args=(worker, subscription, send, stop), daemon=True)

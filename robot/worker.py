@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import logging
 import math
 import queue
 import shutil
@@ -119,13 +120,15 @@ from robot.planning.planner import Planner, PlanningError
 from robot.planning.validator import validate_plan_json
 from robot.planning.world_context import WorldContext
 from robot.power.battery import Battery, ServoElectrical
-from robot.sim.backend import Measurements, MujocoSimBackend
+from robot.sim.backend import Measurements, MujocoSimBackend, SimulationDiverged
 from robot.sim.servo_model import SimulatedServos
 from robot.simple_actions import SimpleActions
 from robot.speech.robot_voice import RobotVoice, VoiceConfig
 from robot.state_board import StateBoard
 from robot.task_bodies import ArmBody, NavBodyOfWorker, TaskBody, carry_back_away_m
 from robot.telemetry import TelemetryBatch, TelemetryLayout, TelemetrySampler
+
+log = logging.getLogger(__name__)
 
 MAX_COMMAND_CHARS = 500
 # When the loop falls this many ticks behind, it stops trying to catch up (sim time would race wall time).
@@ -261,6 +264,9 @@ class RobotWorker:
         self._battery = Battery()
         self._servo_model = SimulatedServos(self.backend.joint_names, np.array(humanoid_v1.servo_torque_per_unit()))
         self._stall_s = 0.0  # injected fault: the next tick hangs this long
+        self._kick_pending = False  # injected fault: the physics is made to diverge on the next tick
+        self._raise_ticks = 0  # injected fault: this many ticks raise, as a controller bug would
+        self._last_tick_error: tuple[str, float] = ("", 0.0)  # what the last failing tick said, and when
         self._diagnostics = RobotDiagnostics(
             RobotReadings(
                 joint_names=self.backend.joint_names, stats=self._stats, servos=self._servo_model.readings,
@@ -1188,6 +1194,12 @@ class RobotWorker:
                 if not 0 < value <= 5:
                     return CommandReply(False, "a control stall lasts 0-5 s", Refusal.INVALID)
                 self._stall_s = value
+            elif fault == Fault.SIM_DIVERGE:
+                self._kick_pending = True
+            elif fault == Fault.CONTROL_ERROR:
+                if not 1 <= value <= 1000:
+                    return CommandReply(False, "a controller fault lasts 1-1000 ticks", Refusal.INVALID)
+                self._raise_ticks = int(value)
             elif fault == Fault.BATTERY_SOC:
                 if not 0 <= value <= 1:
                     return CommandReply(False, "a state of charge is 0..1", Refusal.INVALID)
@@ -1365,8 +1377,7 @@ class RobotWorker:
             try:
                 self._tick()
             except Exception as exc:  # the loop must survive a controller bug: stop safely and report it
-                self._bus.publish("control/error", f"control tick failed: {exc!r}", Level.ERROR)
-                self.submit(EStop(source="control-error"))
+                self._on_tick_error(exc)
             finished = time.perf_counter()
             missed = self.realtime and finished > next_deadline + self.dt
             self._stats.record_tick(finished - started, missed)
@@ -1375,11 +1386,34 @@ class RobotWorker:
             if self.realtime and finished - next_deadline > MAX_TICKS_BEHIND * self.dt:
                 next_deadline = finished + self.dt
 
+    def _on_tick_error(self, exc: Exception) -> None:
+        """A failing tick latches the e-stop; said once, and again only when it changes or a second later (a bug
+        that fails every tick must not flood the events at 100 Hz)."""
+        text, at = self._last_tick_error
+        now = time.monotonic()
+        if repr(exc) != text or now - at > 1.0:
+            self._last_tick_error = (repr(exc), now)
+            log.error("control tick failed", exc_info=exc)
+            self._bus.publish("control/error", f"control tick failed: {exc!r}", Level.ERROR, error=repr(exc))
+        with self._lock:
+            latched = self._estop_latched
+        if not latched:
+            self.submit(EStop(source="control-error", reason=f"the control tick failed: {exc!r}"))
+
+    def _on_divergence(self, exc: SimulationDiverged) -> None:
+        """MuJoCo reset the scene by itself: the robot is stopped, then stood up again at its start pose."""
+        self._bus.publish("sim/diverged", f"{exc}: e-stop latched, robot reset to its start pose", Level.ERROR)
+        self.submit(EStop(source="sim-diverged", reason=str(exc)))
+        self._reset_robot()
+
     def _tick(self) -> None:
         """One control period: targets out, physics (or the servos) forward, measurements in, state published."""
         if self._stall_s > 0:  # injected fault: a controller that hangs
             stall, self._stall_s = self._stall_s, 0.0
             time.sleep(stall)
+        if self._raise_ticks > 0:  # injected fault: a controller bug
+            self._raise_ticks -= 1
+            raise RuntimeError("injected controller fault")
         self._apply_pending_estop()
         self._apply_pending_reset()
         self._apply_pending_obstacles()
@@ -1391,7 +1425,14 @@ class RobotWorker:
             self._targets[_HEAD_PAN] = pan
             self._targets[_HEAD_TILT] = tilt
         self.backend.write(self._targets)
-        self.backend.step(self.dt)
+        if self._kick_pending:
+            self._kick_pending = False
+            self.backend.kick()
+        try:
+            self.backend.step(self.dt)
+        except SimulationDiverged as exc:
+            self._on_divergence(exc)
+            return
         measured = self.backend.read()
         self._measured = measured
         self._sim_time = measured.sim_time_s

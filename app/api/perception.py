@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import asyncio
 import dataclasses
+import json
 import math
 from typing import Annotated, Any
 
@@ -127,6 +128,21 @@ def occupancy_map_png(rt: RuntimeDep) -> Response:
     return Response(map_png(grid), media_type="image/png", headers=headers)
 
 
+def _frame_header(app_state: Any, rt: Runtime, frame: CameraImage) -> str:
+    """The frame's JSON header, encoded once for every page watching (kept on the app with its frame)."""
+    cached = getattr(app_state, "camera_header", None)
+    if cached is not None and cached[0] is frame:
+        return cached[1]
+    state = rt.worker.state().perception
+    text = json.dumps({
+        "type": "frame", "seq": frame.seq, "sim_time_s": frame.sim_time_s, "width": frame.width,
+        "height": frame.height, "camera_hz": state.camera_hz if state else 0.0,
+        "detections": [dataclasses.asdict(d) for d in frame.detections],
+    })  # fmt: skip
+    app_state.camera_header = (frame, text)
+    return text
+
+
 @router.websocket("/ws/camera")
 async def camera_socket(ws: WebSocket) -> None:
     rt: Runtime = ws.app.state.runtime
@@ -137,12 +153,7 @@ async def camera_socket(ws: WebSocket) -> None:
             frame = rt.worker.sensor_feed().camera
             if frame is not None and frame.seq != last_seq:
                 last_seq = frame.seq
-                state = rt.worker.state().perception
-                await ws.send_json({
-                    "type": "frame", "seq": frame.seq, "sim_time_s": frame.sim_time_s, "width": frame.width,
-                    "height": frame.height, "camera_hz": state.camera_hz if state else 0.0,
-                    "detections": [dataclasses.asdict(d) for d in frame.detections],
-                })  # fmt: skip
+                await ws.send_text(_frame_header(ws.app.state, rt, frame))
                 await ws.send_bytes(frame.jpeg)
             await asyncio.sleep(CAMERA_POLL_S)
     except (WebSocketDisconnect, RuntimeError):

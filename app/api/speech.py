@@ -2,39 +2,55 @@
 
 from __future__ import annotations
 
+import logging
 import threading
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, HTTPException, Query, Request, Response
+from fastapi.concurrency import run_in_threadpool
 
 from app.api.deps import Operator, runtime
 from app.runtime import Runtime
 from app.sessions.audio_store import save_recording
 from robot.model.world import generate_world
 from robot.planning.world_context import WorldContext
-from robot.speech.asr import ASRError, SpeechRecognizer
+from robot.speech.asr import ASRError
 from robot.speech.audio import AudioError, from_pcm16, read_wav_bytes
-from robot.speech.engines import build_recognizer
+from robot.speech.recognizer_process import RecognizerProcess
 from robot.speech.sphinx import AUTO_RUN_CONFIDENCE
 from robot.speech.tts import MAX_TEXT_CHARS, TTSError, synthesize
 
+log = logging.getLogger(__name__)
 router = APIRouter(prefix="/api/speech", tags=["speech"])
 RuntimeDep = Annotated[Runtime, Depends(runtime)]
 MAX_AUDIO_BYTES = 1024 * 1024  # 32 s of 16 kHz 16-bit speech: a command, not a speech
 
-_recognizers: dict[tuple[str, int], SpeechRecognizer] = {}
+_recognizers: dict[tuple[str, int], RecognizerProcess] = {}
 _recognizers_lock = threading.Lock()
 
 
-def recognizer(rt: Runtime) -> SpeechRecognizer:
-    """One recogniser per engine and world (building the grammar and decoders takes ~0.3 s)."""
+def recognizer(rt: Runtime) -> RecognizerProcess:
+    """One recogniser process per engine and world, started again when it has died or was stopped for hanging.
+    In its own process: a decoder holds the interpreter lock (up to 85 ms a command), which would stall every
+    WebSocket, the e-stop's included; and a hung or crashed decoder must not take the server with it."""
     key = (rt.settings.asr_engine, rt.settings.seed)
     with _recognizers_lock:
-        if key not in _recognizers:
+        current = _recognizers.get(key)
+        if current is None or not current.alive:
+            if current is not None:
+                log.warning("the speech recogniser process had stopped: starting a new one")
+                current.close()
             world = WorldContext.from_layout(generate_world(rt.settings.seed))
-            _recognizers[key] = build_recognizer(rt.settings.asr_engine, world.objects, world.places,
-                                                 rt.settings.whisper_model_dir)  # fmt: skip
+            _recognizers[key] = RecognizerProcess(rt.settings.asr_engine, world.objects, world.places,
+                                                  rt.settings.whisper_model_dir)  # fmt: skip
         return _recognizers[key]
+
+
+def close_recognizers() -> None:
+    with _recognizers_lock:
+        for process in _recognizers.values():
+            process.close()
+        _recognizers.clear()
 
 
 @router.post("/transcribe", dependencies=[Operator])
@@ -55,11 +71,15 @@ async def transcribe(request: Request, rt: RuntimeDep) -> dict[str, Any]:
         raise HTTPException(
             422, detail={"message": "the recording is shorter than 0.2 s: hold the button while speaking"}
         )
+    # kept with the session before anything can fail: what the operator said is never lost
+    path = save_recording(rt.settings.audio_dir, rt.recorder.session_id, audio.wav_bytes())
     try:
-        engine = recognizer(rt)
+        engine = await run_in_threadpool(recognizer, rt)
+        transcript = await run_in_threadpool(engine.transcribe, audio, rt.settings.asr_timeout_s)
     except ASRError as exc:
-        raise HTTPException(503, detail={"message": str(exc)}) from exc
-    transcript = engine.transcribe(audio)
+        log.error("speech recognition failed: %s", exc)
+        rt.recorder.record_transcript(_unheard(audio.duration_s, rt.settings.asr_engine), "browser", path)
+        raise HTTPException(503, detail={"message": f"speech recognition failed: {exc}"}) from exc
     heard = {
         "text": transcript.text,
         "confidence": round(transcript.confidence, 3),
@@ -70,10 +90,14 @@ async def transcribe(request: Request, rt: RuntimeDep) -> dict[str, Any]:
         # the page runs it without asking when its operator allows that and the recogniser is this sure
         "auto_run": bool(transcript.text) and transcript.in_grammar and transcript.confidence >= AUTO_RUN_CONFIDENCE,
     }
-    # kept with the session, recording included: what the operator said is never lost
-    path = save_recording(rt.settings.audio_dir, rt.recorder.session_id, audio.wav_bytes())
     rt.recorder.record_transcript(heard, "browser", path)
     return heard
+
+
+def _unheard(audio_s: float, engine: str) -> dict[str, Any]:
+    """A recording the recogniser failed on: kept in the session with an empty transcript."""
+    return {"text": "", "confidence": 0.0, "in_grammar": False, "engine": engine, "audio_s": round(audio_s, 3),
+            "decode_ms": 0.0}  # fmt: skip
 
 
 @router.get("/say.wav")

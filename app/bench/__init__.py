@@ -12,7 +12,11 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
     if suite == "core":
         from app.bench.core import run_core
 
-        result = run_core(presses=args.presses, viewers=args.viewers, duration_s=args.duration or 30.0)
+        result = run_core(presses=args.presses, viewers=args.viewers or 2, duration_s=args.duration or 30.0)
+    elif suite == "load":
+        from app.bench.load import run_load
+
+        result = run_load(viewers=args.viewers or 20, presses=args.presses)
     elif suite == "walk":
         from app.bench.walk import run_walk
 

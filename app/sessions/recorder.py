@@ -157,12 +157,18 @@ class SessionRecorder:
                          refusal=reply.refusal.value if reply.refusal else None,
                          errors=list(reply.errors) or None)  # fmt: skip
         self._pending.put(row)
-        self._flush()
+        self._write_through()
 
     def record_transcript(self, heard: dict[str, Any], source: str, audio_path: str | None) -> None:
         """What the recogniser heard (`humanoid transcribe`'s fields) and where its recording is kept."""
         self._pending.put(self._transcript_row(heard, source, audio_path, _utc()))
-        self._flush()
+        self._write_through()
+
+    def _write_through(self) -> None:
+        """On disk before the caller returns, unless the store is failing now: then the recorder's retries take
+        it, and a request does not wait out a locked database each time."""
+        if self.stats.failing_since_wall_s is None:
+            self._flush()
 
     def _transcript_row(self, heard: dict[str, Any], source: str, audio_path: str | None,
                         at: datetime) -> TranscriptRow:  # fmt: skip

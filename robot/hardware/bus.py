@@ -225,6 +225,12 @@ class DynamixelBus:
             if result != COMM_SUCCESS:
                 raise BusError(f"bus watchdog: {self.packets.getTxRxResult(result)}")
 
+    def torque_held(self) -> list[str]:
+        """Joints whose servo has torque on (at start-up: a robot process before this one died holding them)."""
+        reader = self._reader(ct.TORQUE_ENABLE.address, 1)
+        reader.txRxPacket()
+        return [self.joints[self._index[i]].joint for i, data in reader.data_dict.items() if data and data[0]]
+
     def watchdog_tripped(self) -> list[str]:
         """Joints whose servo's bus watchdog has tripped (it stopped, and takes no goals until re-armed)."""
         reader = self._reader(ct.BUS_WATCHDOG.address, 1)

@@ -125,7 +125,9 @@ class HardwareWorker:
     # lifecycle -------------------------------------------------------------------------------------------------
 
     def start(self) -> None:
-        """Open the bus, check every servo answers and the tick fits the bus; torque stays off."""
+        """Open the bus, check every servo answers and the tick fits the bus; torque stays off. Servos found
+        holding with torque on (the process before this one died) are held where they stand, then brought down by
+        the controlled stop."""
         budget = self.bus.budget()
         if budget.utilisation > 1.0:
             need_ms = budget.wire_ms_per_tick + budget.latency_ms_per_tick
@@ -140,8 +142,16 @@ class HardwareWorker:
             self.bus.close()
             raise BusError(f"no answer from {', '.join(silent)} on {self.config.port}")
         with self._bus_lock:
-            changes = self.bus.prepare()  # torque off; position mode, no return delay
-            reading = self.bus.read()
+            held = self.bus.torque_held()
+            if held:  # a robot process died holding the robot up: take it over where it stands, not drop it
+                changes = []
+                reading = self.bus.read()
+                self.bus.arm_watchdog(0)  # clears a tripped watchdog, so the servos take goals again
+                self.bus.write_goals(reading.positions)
+                self.bus.arm_watchdog(self.config.bus_watchdog_ms)
+            else:
+                changes = self.bus.prepare()  # torque off; position mode, no return delay
+                reading = self.bus.read()
         if changes:
             self._events.publish("hardware/setup", f"servo set-up changed: {'; '.join(changes)}", changes=changes)
         self._reading = reading
@@ -157,6 +167,13 @@ class HardwareWorker:
             utilisation=budget.utilisation,
             bytes_per_tick=budget.bytes_per_tick,
         )
+        if held:  # then the controlled stop, as if this process had pressed the e-stop itself
+            self._torque = True
+            self._heartbeat_s = time.monotonic()
+            self._events.publish("hardware/takeover", f"found {len(held)} servos holding with torque on (a robot "
+                                 "process died): holding them where they stand, then the controlled stop",
+                                 Level.WARN, joints=held)  # fmt: skip
+            self.submit(EStop(source="takeover", reason="the robot was found holding with torque on at start-up"))
         self._publish_state()
         self._thread = threading.Thread(target=self._control_loop, name="robot-control", daemon=True)
         self._thread.start()

@@ -63,6 +63,17 @@ class Measurements:
         return bool(self.tilt_deg > FALL_TILT_DEG or self.base_position[2] < FALL_HEIGHT_M)
 
 
+class SimulationDiverged(RuntimeError):
+    """The physics blew up (NaN, inf or huge values): the scene was reset by MuJoCo and must be set up again."""
+
+
+_DIVERGENCE_WARNINGS = {
+    mujoco.mjtWarning.mjWARN_BADQPOS: "bad position",
+    mujoco.mjtWarning.mjWARN_BADQVEL: "bad velocity",
+    mujoco.mjtWarning.mjWARN_BADQACC: "bad acceleration",
+}
+
+
 class MujocoSimBackend:
     """The OP3 in its apartment, stepped at the physics rate, commanded through position actuators."""
 
@@ -171,9 +182,24 @@ class MujocoSimBackend:
         self.data.ctrl[self._actuator] = joint_targets
 
     def step(self, duration_s: float) -> None:
-        """Advance physics by `duration_s` (a whole number of physics steps)."""
+        """Advance physics by `duration_s` (a whole number of physics steps). Raises `SimulationDiverged` when
+        MuJoCo found a NaN, infinite or huge position, velocity or acceleration: it then resets the whole model to
+        its default pose by itself, so the caller must put the robot back on its feet."""
         n = max(1, round(duration_s / self.physics_dt))
+        before = [int(self.data.warning[w].number) for w in _DIVERGENCE_WARNINGS]
         mujoco.mj_step(self.model, self.data, nstep=n)
+        for warning, count in zip(_DIVERGENCE_WARNINGS, before, strict=True):
+            if int(self.data.warning[warning].number) > count:
+                raise SimulationDiverged(
+                    f"physics diverged at t={self.data.time:.3f} s ({_DIVERGENCE_WARNINGS[warning]}, in dof "
+                    f"{self.model.joint(self.model.dof_jntid[self.data.warning[warning].lastinfo]).name or 'free'})"
+                    if 0 <= self.data.warning[warning].lastinfo < self.model.nv
+                    else f"physics diverged at t={self.data.time:.3f} s ({_DIVERGENCE_WARNINGS[warning]})"
+                )
+
+    def kick(self, speed: float = 1e12) -> None:
+        """Injected fault: a velocity no physics survives on the robot's first joint (MuJoCo will find it)."""
+        self.data.qvel[self._joint_dof[0]] = speed
 
     def qpos(self) -> np.ndarray:
         return self.data.qpos.copy()

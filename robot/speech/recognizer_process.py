@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 import pickle
+import select
 import struct
 import subprocess
 import sys
@@ -59,10 +60,23 @@ class RecognizerProcess:
             self.close()
             raise ASRError(reply[1])
 
-    def transcribe(self, audio: Audio) -> Transcript:
+    @property
+    def alive(self) -> bool:
+        return self._process.poll() is None and not self._out.closed
+
+    @property
+    def pid(self) -> int:
+        return self._process.pid
+
+    def transcribe(self, audio: Audio, timeout_s: float | None = None) -> Transcript:
+        """Raises ASRError when the process has gone, or (then killed) gives no answer within `timeout_s`."""
         with self._lock:
             try:
                 _send(self._in, audio.samples)
+                if timeout_s is not None and not select.select([self._out], [], [], timeout_s)[0]:
+                    self._process.kill()  # a hung decoder: the next caller gets a new process
+                    self._process.wait()
+                    raise ASRError(f"the recogniser gave no answer within {timeout_s:g} s: it was stopped")
                 reply = self._reply()
             except (OSError, ValueError) as exc:
                 raise ASRError(f"the recogniser process has gone: {exc}") from exc

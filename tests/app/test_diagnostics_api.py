@@ -205,7 +205,7 @@ def test_a_silent_robot_worker_turns_its_statuses_stale(settings) -> None:
     old = DiagnosticArray(time.time() - 10, 42.0, (DiagnosticStatus("servos/r_knee", Level.OK, "40 C, 12 % load"),))
     worker = SimpleNamespace(diagnostics=lambda: old, is_alive=lambda: False)
     recorder = SimpleNamespace(stats=WriteStats(), backlog=lambda: 0, session_id=7)
-    rt = SimpleNamespace(worker=worker, recorder=recorder, settings=settings, browser_clients=0)
+    rt = SimpleNamespace(worker=worker, recorder=recorder, settings=settings, browser_clients=0, supervisor=None)
     body = diagnostics_json(snapshot(rt))
     knee = body["groups"]["servos"]["statuses"][0]
     assert knee["level_name"] == "STALE" and knee["message"].startswith("no report from the robot for 10 s")

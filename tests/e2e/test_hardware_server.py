@@ -16,6 +16,7 @@ import pytest
 
 from app.bench.browser import launch_chromium
 from app.bench.server import ServerProcess
+from app.mirror_process import MIRROR_NICE
 from robot.hardware import control_table as ct
 from robot.hardware.bus_emulator import BusEmulator
 from robot.hardware.config import default_config, save_config
@@ -106,8 +107,10 @@ def script_heartbeat(server: ServerProcess) -> Iterator[None]:
 
 
 def robot_process(server: ServerProcess) -> psutil.Process:
-    """The robot worker's process: the server's child started by multiprocessing (not its resource tracker)."""
-    (worker,) = [p for p in psutil.Process(server.pid).children() if "spawn_main" in " ".join(p.cmdline())]
+    """The robot worker's process: the server's child started by multiprocessing (not its resource tracker, nor
+    the 3D mirrors' process, which runs at a lower priority)."""
+    (worker,) = [p for p in psutil.Process(server.pid).children()
+                 if "spawn_main" in " ".join(p.cmdline()) and p.nice() != MIRROR_NICE]  # fmt: skip
     return worker
 
 
@@ -140,14 +143,22 @@ def test_when_the_web_server_dies_the_robot_process_makes_the_controlled_stop(to
     worker.wait(timeout=10)  # and then it exits (psutil.TimeoutExpired if not)
 
 
-def test_when_the_robot_process_dies_the_servos_bus_watchdog_stops_them(torque_on) -> None:
+def test_when_the_robot_process_dies_the_servos_hold_then_a_new_one_takes_them_over_and_stops(torque_on) -> None:
+    """Killed, the robot process stops writing: every servo's bus watchdog stops it where it is, holding (not
+    limp), and the server says the robot is not driven. The supervisor then starts a new robot process, which
+    finds the servos holding, takes them over where they stand and makes the controlled stop."""
     emulator, server, worker = torque_on
     config = default_config()
     worker.kill()  # the control loop dies with it: nothing writes to the bus any more
+    health = wait_until(lambda: (r := httpx.get(server.url + "/api/health", timeout=5.0)).status_code == 503 and r, 3)
+    assert health.json()["status"] == "worker_down"
     wait_until(lambda: all(emulator.read(j.servo_id, ct.BUS_WATCHDOG) == -1 for j in config.joints), 3)
     assert all(emulator.read(j.servo_id, ct.TORQUE_ENABLE) for j in config.joints)  # holding, not limp
     knee = emulator.position_rad(KNEE_ID)
     time.sleep(0.2)
     assert emulator.position_rad(KNEE_ID) == pytest.approx(knee, abs=1e-3)
-    health = httpx.get(server.url + "/api/health", timeout=5.0)  # the server says the robot is not driven
-    assert health.status_code == 503 and health.json()["status"] == "worker_down"
+    wait_until(lambda: httpx.get(server.url + "/api/health", timeout=5.0).status_code == 200, 60)
+    kinds = {e["kind"] for e in server.get("/api/events")}
+    assert {"hardware/takeover", "worker/restarted"} <= kinds
+    wait_until(lambda: emulator.read(14, ct.GOAL_POSITION) > ct.POSITION_CENTRE + 100)  # l_knee crouching
+    wait_until(lambda: not any(emulator.read(j.servo_id, ct.TORQUE_ENABLE) for j in config.joints), 8)

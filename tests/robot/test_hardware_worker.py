@@ -218,3 +218,34 @@ def test_a_stalled_control_loop_is_stopped_by_the_servos_then_crouches_and_turns
         assert not any(torque_on(emulator))
     finally:
         robot.stop()
+
+
+def test_a_robot_process_started_on_servos_left_holding_takes_them_over_then_makes_the_controlled_stop(
+    emulator, layout
+) -> None:
+    """The robot process before this one died with torque on: the servos' watchdog stopped them and they hold the
+    robot up. The new process must not drop it (turning torque off to set the servos up): it holds them where they
+    stand, then crouches and turns torque off, as its own e-stop would."""
+    config = dataclasses.replace(CONFIG, port=emulator.port_name, bus_watchdog_ms=100)
+    first = HardwareWorker(config, layout, estop_torque_off_s=1.0, deadman_s=0.0)
+    first.start()
+    first.submit(SetTorque(True))
+    wait(lambda: first.state().torque_enabled)
+    first._stop.set()  # the process dies: no controlled stop, no torque off, the port just goes quiet
+    first._thread.join(timeout=2)
+    first.bus.close()
+    wait(lambda: all(emulator.read(j.servo_id, ct.BUS_WATCHDOG) == -1 for j in CONFIG.joints))  # tripped
+    assert all(torque_on(emulator))
+    second = HardwareWorker(config, layout, estop_torque_off_s=1.0, deadman_s=0.0)
+    second.start()
+    try:
+        takeover = next(e for e in second.recent_events() if e.kind == "hardware/takeover")
+        assert len(takeover.data["joints"]) == len(CONFIG.joints)
+        assert all(torque_on(emulator))  # not dropped
+        assert not any(e.kind == "hardware/setup" for e in second.recent_events())
+        wait(lambda: second.state().estop_latched)
+        wait(lambda: emulator.read(sid("l_knee"), ct.GOAL_POSITION) > ct.POSITION_CENTRE + 100)  # crouching
+        wait(lambda: not second.state().torque_enabled, timeout=4)
+        assert not any(torque_on(emulator))
+    finally:
+        second.stop()

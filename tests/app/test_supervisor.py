@@ -1,0 +1,135 @@
+"""The supervisor restarts a robot process that died: safely (e-stop latched, the old session closed as crashed
+with all it had kept, a new session), while the server keeps serving; a robot that keeps dying is left down."""
+
+from __future__ import annotations
+
+import os
+import signal
+import time
+from collections.abc import Iterator
+
+import pytest
+from fastapi.testclient import TestClient
+from sqlalchemy import select
+
+from app.main import create_app
+from app.runtime import Runtime
+from app.sessions.models import CommandRow, EventRow, SessionRow
+from app.supervisor import WorkerSupervisor, describe_exit
+from robot.events import EventBus
+from robot.interface import EStop, Level
+from tests.app.test_api import wait_until
+
+
+class DyingWorker:
+    """A stand-in robot process that can be told to die, and whose restarts are counted."""
+
+    def __init__(self, fail_restart: bool = False) -> None:
+        self.alive = True
+        self.exitcode: int | None = None
+        self.restarted = 0
+        self.commands: list = []
+        self.bus = EventBus()
+        self.fail_restart = fail_restart
+
+    def die(self, code: int) -> None:
+        self.alive, self.exitcode = False, code
+
+    def is_alive(self) -> bool:
+        return self.alive
+
+    def restart(self) -> None:
+        if self.fail_restart:
+            raise RuntimeError("no robot today")
+        self.restarted += 1
+        self.alive, self.exitcode = True, None
+
+    def submit(self, command):
+        self.commands.append(command)
+
+    def announce(self, kind, message, level=Level.OK, **data):
+        return self.bus.publish(kind, message, level, **data)
+
+
+def test_exits_are_described_for_a_person() -> None:
+    assert describe_exit(-9) == "killed by SIGKILL"
+    assert describe_exit(70) == "exit code 70"
+    assert describe_exit(None) == "it stopped answering"
+
+
+def test_a_dead_worker_is_restarted_with_the_estop_latched_and_one_that_keeps_dying_is_left_down() -> None:
+    worker = DyingWorker()
+    deaths, restarts = [], []
+    supervisor = WorkerSupervisor(worker, on_death=deaths.append, on_restart=lambda: restarts.append(1),
+                                  max_restarts=2, window_s=60, first_backoff_s=0.05)  # fmt: skip
+    supervisor.start()
+    try:
+        for n in (1, 2):
+            worker.die(-11)
+            wait_until(lambda n=n: worker.restarted == n and restarts == [1] * n, timeout=5)
+            assert isinstance(worker.commands[-1], EStop) and worker.commands[-1].source == "supervisor"
+        worker.die(-9)
+        wait_until(lambda: supervisor.gave_up, timeout=5)
+        time.sleep(0.5)
+        assert worker.restarted == 2 and not worker.alive  # left down
+        assert deaths == ["killed by SIGSEGV", "killed by SIGSEGV", "killed by SIGKILL"]
+        kinds = [(e.kind, e.level) for e in worker.bus.history()]
+        assert kinds.count(("worker/died", Level.ERROR)) == 3 and kinds.count(("worker/restarted", Level.WARN)) == 2
+        assert "left down" in supervisor.gave_up
+    finally:
+        supervisor.stop()
+
+
+def test_a_restart_that_fails_is_said_and_tried_again() -> None:
+    worker = DyingWorker(fail_restart=True)
+    supervisor = WorkerSupervisor(worker, max_restarts=2, window_s=60, first_backoff_s=0.05)
+    supervisor.start()
+    try:
+        worker.die(1)
+        wait_until(lambda: supervisor.gave_up, timeout=5)
+        failures = [e for e in worker.bus.history() if e.kind == "worker/restart_failed"]
+        assert len(failures) == 2 and "no robot today" in failures[0].message
+    finally:
+        supervisor.stop()
+
+
+@pytest.fixture
+def served(settings) -> Iterator[TestClient]:
+    """The app as `humanoid serve` runs it: the robot in its own process, supervised (perception off: faster)."""
+    runtime = Runtime.start(settings.model_copy(update={"perception": False}))
+    with TestClient(create_app(settings, runtime=runtime)) as client:
+        client.runtime = runtime  # type: ignore[attr-defined]
+        yield client
+    runtime.stop()
+
+
+@pytest.mark.slow
+def test_a_killed_robot_process_is_restarted_stopped_and_the_server_never_stops_serving(served) -> None:
+    rt = served.runtime
+    assert served.post("/api/commands", json={"text": "say before the crash"}).status_code == 202
+    first_session, first_pid = rt.recorder.session_id, rt.worker.pid
+    os.kill(first_pid, signal.SIGKILL)  # as a segfault in the physics would
+    down = wait_until(lambda: (r := served.get("/api/health")).status_code == 503 and r, timeout=5)
+    assert down.json()["status"] == "worker_down"  # the server answers while the robot is down
+    health = wait_until(lambda: (r := served.get("/api/health")).status_code == 200 and r.json(), timeout=120)
+    assert rt.worker.pid != first_pid and health["session_id"] != first_session
+    assert health["estop_latched"]  # nothing moves until an operator says so
+    refused = served.post("/api/commands", json={"text": "say after the crash"})
+    assert refused.status_code == 409
+    with rt.db() as db:
+        old = db.get(SessionRow, first_session)
+        assert old.outcome == "crashed" and "SIGKILL" in old.summary["cause"]
+        said = db.scalars(select(CommandRow.text).where(CommandRow.session_id == first_session)).all()
+        assert "say before the crash" in said  # nothing recorded before the crash is lost
+        died = db.scalars(select(EventRow).where(EventRow.session_id == first_session,
+                                                 EventRow.kind == "worker/died")).one()  # fmt: skip
+        assert "SIGKILL" in died.message
+    restarted = wait_until(lambda: next((e for e in served.get("/api/events").json()
+                                         if e["kind"] == "worker/restarted"), None), timeout=10)  # fmt: skip
+    assert "e-stop latched" in restarted["message"]
+    worker_status = next(s for g in served.get("/api/diagnostics").json()["groups"].values()
+                         for s in g["statuses"] if s["name"] == "links/robot_worker")  # fmt: skip
+    assert worker_status["level_name"] == "OK" and "restarted 1 times" in worker_status["message"]
+    assert served.post("/api/estop/reset").status_code == 200
+    assert served.post("/api/commands", json={"text": "say after the crash"}).status_code == 202
+    wait_until(lambda: rt.recorder.session_id == health["session_id"], timeout=5)
