@@ -36,6 +36,7 @@ class BrowserFeed:
         self.control = ""
         self.control_version = 0
         self._control_value: Any = None
+        self._diagnostics_at = 0.0
         self._pages = 0
         self._changed: asyncio.Condition | None = None
         self._task: asyncio.Task | None = None
@@ -87,5 +88,3 @@ class BrowserFeed:
             self.control = json.dumps({"type": "control", "control": control})
             self.control_version += 1
         self.version += 1
-
-    _diagnostics_at = 0.0

@@ -1402,6 +1402,7 @@ class RobotWorker:
 
     def _on_divergence(self, exc: SimulationDiverged) -> None:
         """MuJoCo reset the scene by itself: the robot is stopped, then stood up again at its start pose."""
+        log.error("%s: e-stop latched, robot reset to its start pose", exc)
         self._bus.publish("sim/diverged", f"{exc}: e-stop latched, robot reset to its start pose", Level.ERROR)
         self.submit(EStop(source="sim-diverged", reason=str(exc)))
         self._reset_robot()

@@ -177,7 +177,9 @@ class SessionRecorder:
                              audio_s=heard["audio_s"], decode_ms=heard["decode_ms"], audio_path=audio_path)  # fmt: skip
 
     def close(self, outcome: str | None = None, summary: dict[str, Any] | None = None) -> None:
-        """Flush everything, then mark the session ended."""
+        """Flush everything, then mark the session ended (once: a session closed as crashed stays so)."""
+        if self._stop.is_set():
+            return
         self._stop.set()
         self._thread.join(timeout=10.0)
         self._drain_events()

@@ -276,3 +276,15 @@ def test_exported_transforms_compose_back_to_the_bodies_world_poses(scene_model)
     assert len(chain) >= 6
     assert np.allclose(position, bodies.data.xpos[body], atol=1e-9)
     assert np.allclose(frame, bodies.data.xmat[body].reshape(3, 3), atol=1e-9)
+
+
+def test_a_session_closed_as_crashed_stays_crashed_when_the_server_closes_it_again(store, make_worker) -> None:
+    from app.sessions.recorder import SessionRecorder
+
+    factory, audio_dir = store
+    recorder = SessionRecorder(factory, make_worker(realtime=False), kind="serve", seed=0, audio_dir=audio_dir)
+    recorder.close(outcome="crashed", summary={"cause": "the robot process died (killed by SIGKILL)"})
+    recorder.close()  # the server shutting down later (the supervisor had given up on the robot)
+    with factory() as db:
+        row = db.get(SessionRow, recorder.session_id)
+        assert row.outcome == "crashed" and "SIGKILL" in row.summary["cause"]

@@ -27,7 +27,9 @@ def test_a_pose_is_read_in_the_ways_people_type_it(text: str, goal: PoseGoal) ->
     assert parse_pose_goal(goal.text()) == pytest.approx(goal)  # the canonical form reads back the same
 
 
-@pytest.mark.parametrize("text", ["the kitchen", "1, 2, 3, 4", "1.2", "900, 0", ""])
+@pytest.mark.parametrize(
+    "text", ["the kitchen", "1, 2, 3, 4", "1.2", "900, 0", "", "nan, 1", "inf, 0", "1e400, 2", "0.5, 0.5, nan"]
+)
 def test_what_is_not_a_pose_is_not_taken_for_one(text: str) -> None:
     assert parse_pose_goal(text) is None
 
