@@ -274,24 +274,24 @@ def test_cli_estop_latches_and_releases_a_running_server(server) -> None:
 
 def test_the_served_websocket_closes_on_a_frame_over_64_kib_and_refuses_one_over_4_kib(server) -> None:
     """Frames are limited where they are read (uvicorn closes the socket, 1009), and messages are limited again
-    by the handler (said, the socket stays open); the server and robot go on."""
-    import asyncio
+    by the handler (said, the socket stays open); the server and robot go on. (The synchronous client: this
+    module's Playwright runs an event loop on this thread.)"""
+    from websockets.exceptions import ConnectionClosed
+    from websockets.sync.client import connect
 
-    import websockets
-
-    async def send(size: int) -> str:
-        async with websockets.connect(server.url.replace("http", "ws") + "/ws", max_size=None) as ws:
-            await ws.send('{"type": "ping", "t": "' + "x" * size + '"}')
+    def send(size: int) -> str:
+        with connect(server.url.replace("http", "ws") + "/ws", max_size=None) as ws:
+            ws.send('{"type": "ping", "t": "' + "x" * size + '"}')
             try:
                 while True:
-                    message = await asyncio.wait_for(ws.recv(), timeout=10)
+                    message = ws.recv(timeout=10)
                     if '"error"' in message[:20]:
                         return message
-            except websockets.ConnectionClosed as closed:
+            except ConnectionClosed as closed:
                 return f"closed {closed.rcvd.code if closed.rcvd else None}"
 
-    assert "larger than 4096 bytes" in asyncio.run(send(5_000))
-    assert asyncio.run(send(70_000)) == "closed 1009"  # message too big
+    assert "larger than 4096 bytes" in send(5_000)
+    assert send(70_000) == "closed 1009"  # message too big
     assert httpx.get(server.url + "/api/health").status_code == 200
 
 
