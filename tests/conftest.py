@@ -65,3 +65,14 @@ def client(settings: Settings, make_worker) -> Iterator[TestClient]:
         test_client.runtime = runtime  # type: ignore[attr-defined]
         yield test_client
     runtime.stop()
+
+
+@pytest.fixture
+def served(settings: Settings) -> Iterator[TestClient]:
+    """The app as `humanoid serve` runs it: the robot in its own process (its threads at real-time priority, its
+    own interpreter lock), supervised, with the robot's own diagnostics thresholds. Perception off: faster."""
+    runtime = Runtime.start(settings.model_copy(update={"perception": False}))
+    with TestClient(create_app(settings, runtime=runtime)) as test_client:
+        test_client.runtime = runtime  # type: ignore[attr-defined]
+        yield test_client
+    runtime.stop()

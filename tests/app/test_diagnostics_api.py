@@ -179,22 +179,11 @@ def _burn(seconds: float) -> None:
         pass
 
 
-@pytest.fixture
-def served_client(settings) -> Iterator[TestClient]:
-    """The app as `humanoid serve` runs it: the robot in its own process (its threads at real-time priority, its
-    own interpreter lock), with the robot's own thresholds. Perception off: faster to start."""
-    runtime = Runtime.start(settings.model_copy(update={"perception": False}))
-    with TestClient(create_app(settings, runtime=runtime)) as test_client:
-        test_client.runtime = runtime  # type: ignore[attr-defined]
-        yield test_client
-    runtime.stop()
-
-
-def test_cpu_overload_is_a_warning(served_client) -> None:
+def test_cpu_overload_is_a_warning(served) -> None:
     """Every core busy for several seconds (real load, not a pretend reading). With the robot in the test's own
     process its control thread waited for the interpreter lock held by threads the burners had pre-empted, and
     the watchdog stopped the robot now and then: served, the robot has its own process, as here."""
-    client = served_client
+    client = served
     burners = [mp.get_context("spawn").Process(target=_burn, args=(8.0,)) for _ in range(mp.cpu_count())]
     for b in burners:
         b.start()

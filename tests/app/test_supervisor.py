@@ -6,14 +6,10 @@ from __future__ import annotations
 import os
 import signal
 import time
-from collections.abc import Iterator
 
 import pytest
-from fastapi.testclient import TestClient
 from sqlalchemy import select
 
-from app.main import create_app
-from app.runtime import Runtime
 from app.sessions.models import CommandRow, EventRow, SessionRow
 from app.supervisor import WorkerSupervisor, describe_exit
 from robot.events import EventBus
@@ -91,16 +87,6 @@ def test_a_restart_that_fails_is_said_and_tried_again() -> None:
         assert len(failures) == 2 and "no robot today" in failures[0].message
     finally:
         supervisor.stop()
-
-
-@pytest.fixture
-def served(settings) -> Iterator[TestClient]:
-    """The app as `humanoid serve` runs it: the robot in its own process, supervised (perception off: faster)."""
-    runtime = Runtime.start(settings.model_copy(update={"perception": False}))
-    with TestClient(create_app(settings, runtime=runtime)) as client:
-        client.runtime = runtime  # type: ignore[attr-defined]
-        yield client
-    runtime.stop()
 
 
 @pytest.mark.slow
