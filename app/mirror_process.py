@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from multiprocessing.connection import Connection
 from typing import Any
 
-from robot.interface import Command, CommandReply, RobotDescription, RobotState, SensorFeed
+from robot.interface import Command, CommandReply, Level, RobotDescription, RobotState, SensorFeed
 from robot.process import WorkerProcess, merge_feed
 
 log = logging.getLogger(__name__)
@@ -113,7 +113,14 @@ class MirrorProcess:
                     if name in self.mirrors:
                         self.mirrors[name].updates = count
             elif message[0] == "cmd":  # a click in a 3D view; its outcome shows on the page like any plan's
-                threading.Thread(target=self._worker.submit, args=(message[1],), daemon=True).start()
+                threading.Thread(target=self._submit_click, args=(message[1],), daemon=True).start()
+
+    def _submit_click(self, command: Command) -> None:
+        """A refused click makes no plan to show, so the refusal is said in the events (the page lists them)."""
+        reply = self._worker.submit(command)
+        if not reply.accepted:
+            self._worker.announce("mirror/click_refused", f"3D view click refused: {reply.message}", Level.WARN,
+                                  refusal=str(reply.refusal.value) if reply.refusal else None)  # fmt: skip
 
 
 class PipedPort:

@@ -34,6 +34,9 @@ BLOCK_MIN_LEFT_M = 0.5
 # width plus the navigator's inflation is 0.3 m), so the robot must replan round it.
 BLOCK_SIDE_OFFSETS_M = (0.0, 0.06, -0.06, 0.12, -0.12)
 BLOCK_MAP_MARGIN_M = 0.0  # more (for the lidar map's cells and noise) found no place at all on seeds 0-3
+# The search for a place runs in the robot's process, beside its control loop: at most this often (simulated time),
+# or a world with no place for a box would search on every state and slow the robot it is judging.
+BLOCK_SEARCH_PERIOD_S = 0.5
 MEDIAN_SIM_BAR_S = 90.0
 SETTLE_SIM_S = 0.5
 TRUTH_FAILURE = "the plan succeeded, but the simulator's truth disagrees: the mug is not where it should be"
@@ -135,6 +138,7 @@ class _PathBlocker:
         self._worker = worker
         self._layout = layout
         self.dropped_at: list[float] | None = None
+        self._next_search_s = 0.0
 
     def watch(self, state: Any) -> bool:
         """Called with each state the bench waits on; always True (it never ends the wait itself)."""
@@ -152,6 +156,9 @@ class _PathBlocker:
         progress = _nearest_arc(path, arc, here)
         if progress < BLOCK_AFTER_M or arc[-1] - (progress + BLOCK_AHEAD_M) < BLOCK_MIN_LEFT_M:
             return True
+        if state.sim_time_s < self._next_search_s:
+            return True
+        self._next_search_s = state.sim_time_s + BLOCK_SEARCH_PERIOD_S
         for ahead in np.arange(BLOCK_AHEAD_M, arc[-1] - progress - BLOCK_MIN_LEFT_M, 0.1):
             s = progress + float(ahead)
             x, y = _point_at(path, arc, s)

@@ -255,15 +255,17 @@ FRAME_INERTIA = 1e-9
 
 @functools.cache
 def placo_mjcf() -> str:
-    """The kinematic/inertial model for placo, derived from `build_robot_spec()` (cached: deriving it takes ~5 s,
-    and the reach IK asked for it again at the first grasp, which stood the robot still at the counter that long).
+    """The kinematic/inertial model for placo, derived from `build_robot_spec()` (cached: the reach IK asks for it
+    again at the first grasp, and deriving it once stood the robot still at the counter for seconds).
 
     Geometry, actuators, sensors and constraints are dropped (placo needs none of them), the floating base's free
     joint is removed (placo adds its own), and the frames the walking controller expects are added as bodies.
     """
     spec = build_robot_spec()
     spec.modelname = MODEL_NAME + "_placo"
-    compiled = spec.compile()
+    # The inertias come from a twin: once a spec is compiled, each element deleted from it costs ~80 ms (10 s in
+    # all, at every robot start); deleted from a spec never compiled, microseconds.
+    compiled = build_robot_spec().compile()
     for body in spec.bodies[1:]:  # freeze the inertias the geometry implied before the geometry goes
         b = compiled.body(body.name)
         body.explicitinertial = True
