@@ -120,7 +120,7 @@ class MirrorProcess:
         reply = self._worker.submit(command)
         if not reply.accepted:
             self._worker.announce("mirror/click_refused", f"3D view click refused: {reply.message}", Level.WARN,
-                                  refusal=str(reply.refusal.value) if reply.refusal else None)  # fmt: skip
+                                  refusal=reply.refusal.value if reply.refusal else None)  # fmt: skip
 
 
 class PipedPort:
