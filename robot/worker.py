@@ -246,9 +246,7 @@ class RobotWorker:
         # joints back: the robot's next body step waits for that.
         self._arm_finishing = False
         self._default_stand = self._stand.copy()
-        self._perception = (
-            PerceptionService(layout, self._board_latest, self._bus.publish, realtime) if perception else None
-        )
+        self._perception = PerceptionService(layout, self._board_latest, self._bus.publish) if perception else None
         self._executor = PlanExecutor(capabilities or self._capabilities())
 
         self._jobs: queue.Queue[_Job | None] = queue.Queue()

@@ -1,7 +1,7 @@
-"""Where the sensor suite runs: in the caller's thread, or in a child process.
+"""Where the sensor suite runs: in a child process (and, inside it, in the calling thread).
 
 Rendering holds the interpreter lock for its ~10 ms (measured: a thread rendering in a loop delayed a 100 Hz
-loop in the same process by up to 0.7 s), so in real time the suite runs in its own process, like the gait
+loop in the same process by up to 0.7 s), so the suite runs in its own process, like the gait
 planner (started with `subprocess`, since the robot worker may itself be a daemon process). The child builds its
 own copy of the scene from the layout and keeps the occupancy map; each request is one sensing instant.
 """
@@ -33,7 +33,7 @@ class SensorRunner(Protocol):
 
 
 class InlineSensors:
-    """The suite in the calling thread (headless runs, tests). Create and use it on one thread (EGL)."""
+    """The suite in the calling thread (the sensor process's). Create and use it on one thread (EGL)."""
 
     def __init__(self, layout: WorldLayout) -> None:
         self.suite = SensorSuite(layout)
