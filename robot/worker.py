@@ -15,19 +15,16 @@ import functools
 import logging
 import math
 import queue
-import shutil
 import sys
-import tempfile
 import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from robot.control.gait import write_placo_model
+from robot.control.gait import placo_model_dir, write_placo_model
 from robot.control.head import DEFAULT_TILT, HeadController
 from robot.control.locomotion import LocomotionController, Velocity, clip_velocity
 from robot.control.posture import PostureController
@@ -203,11 +200,9 @@ class RobotWorker:
         self.dt = 1.0 / control_hz
         self._bus = EventBus(sim_clock=lambda: self._sim_time)
         self._stats = LoopStats(control_hz)
-        self._model_dir: str | None = None
         if locomotion is None:
             # the gait planner runs in its own process in real time (its replans hold the interpreter lock)
-            self._model_dir = tempfile.mkdtemp(prefix="humanoid-placo-")
-            locomotion = build_locomotion(self.backend, Path(self._model_dir), realtime)
+            locomotion = build_locomotion(self.backend, placo_model_dir(), realtime)
         self._loco = locomotion
         self._stand = self._loco.stand_targets  # the walk-ready stance: every walk starts and ends in it
         self.backend.reset(self._stand)
@@ -327,8 +322,6 @@ class RobotWorker:
         if self._perception is not None:
             self._perception.stop()
         self._loco.walking.planner.close()
-        if self._model_dir is not None:
-            shutil.rmtree(self._model_dir, ignore_errors=True)
 
     # ----------------------------------------------------------------------------------------------------------
     # RobotPort
@@ -525,9 +518,7 @@ class RobotWorker:
 
     def _arm_motion(self) -> ArmMotion:
         if self._arm is None:
-            directory = Path(self._model_dir or tempfile.mkdtemp(prefix="humanoid-placo-"))
-            self._model_dir = str(directory)
-            self._arm = ArmMotion(ReachIK(write_placo_model(directory), self.dt), self.dt)
+            self._arm = ArmMotion(ReachIK(write_placo_model(), self.dt), self.dt)
         return self._arm
 
     def _take_arm(self) -> ArmMotion:

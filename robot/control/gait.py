@@ -11,9 +11,11 @@ control loop (`robot.control.gait_process`).
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import math
 import os
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -70,13 +72,26 @@ def walk_parameters() -> placo.HumanoidParameters:
     return p
 
 
-def write_placo_model(directory: Path) -> Path:
-    """Write the placo model derived from humanoid_v1 (placo loads from a file path)."""
+def placo_model_dir() -> Path:
+    """Where robots keep their placo model: a per-user cache, not a directory per process, so that a robot process
+    killed outright leaves nothing behind."""
+    cache = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(cache) / "humanoid" / "placo"
+
+
+def write_placo_model(directory: Path | None = None) -> Path:
+    """Write the placo model derived from humanoid_v1 (placo loads from a file path). The file is named by its
+    content and written whole (a rename), so processes running different versions never read each other's model
+    or half a file."""
+    directory = directory or placo_model_dir()
     directory.mkdir(parents=True, exist_ok=True)
-    path = directory / f"{humanoid_v1.MODEL_NAME}_placo.xml"
     text = humanoid_v1.placo_mjcf()
+    digest = hashlib.sha256(text.encode()).hexdigest()[:16]
+    path = directory / f"{humanoid_v1.MODEL_NAME}_placo_{digest}.xml"
     if not path.is_file() or path.read_text() != text:
-        path.write_text(text)
+        partial = directory / f".{path.name}.{os.getpid()}.{threading.get_ident()}"
+        partial.write_text(text)
+        os.replace(partial, path)
     return path
 
 

@@ -117,3 +117,18 @@ def test_standing_the_grippers_hang_well_clear_of_the_floor(robot_model) -> None
     soles = lowest(tuple(humanoid_v1.FOOT_BODIES.values()))
     hands = lowest(tuple(f"{s}_{part}" for s in "lr" for part in ("wrist_link", "finger_a", "finger_b")))
     assert hands - soles > 0.044  # 0.038 with the grippers open
+
+
+def test_the_placo_model_is_cached_per_user_by_content(tmp_path, monkeypatch) -> None:
+    """Every robot process shares one model file (a killed process leaves no directory behind), and a process
+    running other code never loads a model written by this one."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    first = write_placo_model()
+    assert first.parent == tmp_path / "humanoid" / "placo"
+    assert write_placo_model() == first
+    assert first.read_text() == humanoid_v1.placo_mjcf()
+    monkeypatch.setattr(humanoid_v1, "placo_mjcf", lambda: "<mujoco model='other'/>")
+    other = write_placo_model()
+    assert other != first and other.read_text() == "<mujoco model='other'/>"
+    assert first.read_text() != other.read_text()
+    assert sorted(p.name for p in first.parent.iterdir()) == sorted([first.name, other.name])  # no partial files
