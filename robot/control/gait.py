@@ -15,6 +15,7 @@ import hashlib
 import math
 import os
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Iterator
@@ -83,7 +84,11 @@ def write_placo_model(directory: Path | None = None) -> Path:
     """Write the placo model derived from humanoid_v1 (placo loads from a file path). The file is named by its
     content and written whole (a rename), so processes running different versions never read each other's model
     or half a file."""
-    directory = directory or placo_model_dir()
+    if directory is None:
+        try:
+            return write_placo_model(placo_model_dir())
+        except OSError:  # no writable home (a service account): the temporary directory, one per user
+            return write_placo_model(Path(tempfile.gettempdir()) / f"humanoid-placo-{os.getuid()}")
     directory.mkdir(parents=True, exist_ok=True)
     text = humanoid_v1.placo_mjcf()
     digest = hashlib.sha256(text.encode()).hexdigest()[:16]

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+import os
+import tempfile
 
 import mujoco
 import numpy as np
@@ -132,3 +134,14 @@ def test_the_placo_model_is_cached_per_user_by_content(tmp_path, monkeypatch) ->
     assert other != first and other.read_text() == "<mujoco model='other'/>"
     assert first.read_text() != other.read_text()
     assert sorted(p.name for p in first.parent.iterdir()) == sorted([first.name, other.name])  # no partial files
+
+
+def test_without_a_writable_cache_the_placo_model_goes_to_the_temporary_directory(tmp_path, monkeypatch) -> None:
+    not_a_directory = tmp_path / "cache"
+    not_a_directory.write_text("")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(not_a_directory))
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
+    (tmp_path / "tmp").mkdir()
+    path = write_placo_model()
+    assert path.parent == tmp_path / "tmp" / f"humanoid-placo-{os.getuid()}"
+    assert path.read_text() == humanoid_v1.placo_mjcf()
