@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from robot.control.gait import placo_model_dir, write_placo_model
+from robot.control.gait import write_placo_model
 from robot.control.head import DEFAULT_TILT, HeadController
 from robot.control.locomotion import LocomotionController, Velocity, clip_velocity
 from robot.control.posture import PostureController
@@ -202,7 +202,7 @@ class RobotWorker:
         self._stats = LoopStats(control_hz)
         if locomotion is None:
             # the gait planner runs in its own process in real time (its replans hold the interpreter lock)
-            locomotion = build_locomotion(self.backend, placo_model_dir(), realtime)
+            locomotion = build_locomotion(self.backend, planner_process=realtime)
         self._loco = locomotion
         self._stand = self._loco.stand_targets  # the walk-ready stance: every walk starts and ends in it
         self.backend.reset(self._stand)

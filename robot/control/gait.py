@@ -93,7 +93,7 @@ def write_placo_model(directory: Path | None = None) -> Path:
     text = humanoid_v1.placo_mjcf()
     digest = hashlib.sha256(text.encode()).hexdigest()[:16]
     path = directory / f"{humanoid_v1.MODEL_NAME}_placo_{digest}.xml"
-    if not path.is_file() or path.read_text() != text:
+    if not path.is_file():  # named by its content and only ever written whole: one there is the right one
         partial = directory / f".{path.name}.{os.getpid()}.{threading.get_ident()}"
         partial.write_text(text)
         os.replace(partial, path)

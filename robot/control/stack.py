@@ -33,9 +33,10 @@ class HasLegSensors(Protocol):
 
 
 def build_locomotion(
-    backend: SensingBackend, model_dir: Path, planner_process: bool = True, pose_loop: bool = True
+    backend: SensingBackend, model_dir: Path | None = None, planner_process: bool = True, pose_loop: bool = True
 ) -> LocomotionController:
-    """The locomotion stack: gait planner (own process, or inline for tests and tools), IK, balance, odometry."""
+    """The locomotion stack: gait planner (own process, or inline for tests and tools), IK, balance, odometry.
+    `model_dir`: where the placo model goes (default: the per-user cache, see `write_placo_model`)."""
     model = write_placo_model(model_dir)
     planner = ProcessGaitPlanner(model, CONTROL_DT) if planner_process else InlineGaitPlanner(model, CONTROL_DT)
     return LocomotionController(planner, WholeBodyIK(model, CONTROL_DT), AnkleBalance(backend.joint_axes()),
