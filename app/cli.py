@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import ssl
 import sys
 
 from app.auth.cli import add_users_parser
@@ -26,6 +27,13 @@ def _serve(args: argparse.Namespace, settings: Settings) -> int:
     settings = settings.model_copy(update={k: v for k, v in overrides.items() if v is not None})
     if args.viser_port is not None:
         settings = settings.model_copy(update={"viser_port": args.viser_port})
+    if args.tls or args.tls_cert or args.tls_key:
+        try:
+            tls = _tls_files(args, settings)
+        except (OSError, ValueError) as exc:
+            print(f"humanoid serve: {exc}", file=sys.stderr)
+            return 2
+        settings = settings.model_copy(update={"tls_cert": tls.cert, "tls_key": tls.key})
     upgrade_to_head(settings.database_url)
     try:  # said here plainly, before anything starts (Runtime.start checks again)
         _access_control(settings).check_exposure()
@@ -35,16 +43,46 @@ def _serve(args: argparse.Namespace, settings: Settings) -> int:
     # Threads here (HTTP, WebSockets, the 3D mirror, the recorder) share one interpreter lock; a short switch
     # interval bounds how long the e-stop relay can wait for it behind a busy thread.
     sys.setswitchinterval(0.0005)
-    print(f"Humanoid mission control: http://{settings.host}:{settings.port}")
+    scheme = "https" if settings.tls_files() else "http"
+    print(f"Humanoid mission control: {scheme}://{settings.host}:{settings.port}")
     print(
         f"  3D views on ports {settings.viser_port} (full) and {settings.viser_light_port} (light); "
         f"session replay on {settings.replay_port}"
     )
     # No per-message compression: deflating each page's copy of each state cost ~12 % of this process's interpreter
     # lock with 20 pages (`humanoid bench load`); the e-stop waits behind whatever holds that lock.
-    uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_level="warning", ws_max_size=65536,
-                ws_per_message_deflate=False)  # fmt: skip
+    uvicorn.run(
+        create_app(settings),
+        host=settings.host,
+        port=settings.port,
+        log_level="warning",
+        ws_max_size=65536,
+        ws_per_message_deflate=False,
+        ssl_certfile=settings.tls_cert or None,
+        ssl_keyfile=settings.tls_key or None,
+    )
     return 0
+
+
+def _tls_files(args: argparse.Namespace, settings: Settings):  # type: ignore[no-untyped-def]
+    """The certificate given (both files, readable and matching), or the robot's own for its names (made once)."""
+    from pathlib import Path
+
+    from app.tls import TlsFiles, ensure_certificate
+
+    if args.tls_cert or args.tls_key:
+        if not (args.tls_cert and args.tls_key):
+            raise ValueError("--tls-cert and --tls-key go together")
+        files = TlsFiles(args.tls_cert, args.tls_key)
+        try:
+            files.server_context()
+        except ssl.SSLError as exc:
+            raise ValueError(f"cannot use {args.tls_cert} with {args.tls_key}: {exc}") from exc
+        return files
+    files = ensure_certificate(Path(settings.data_dir) / "tls", settings.host)
+    ca = Path(files.cert).parent / "ca.pem"
+    print(f"HTTPS with this robot's own certificate: browsers trust it once they import {ca}")
+    return files
 
 
 def _access_control(settings: Settings):  # type: ignore[no-untyped-def]
@@ -229,6 +267,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     serve.add_argument("--seed", type=int, default=None, help="world seed (object placement, obstacles)")
     serve.add_argument("--no-mirror", action="store_true", help="do not start the 3D mirror")
+    serve.add_argument(
+        "--tls",
+        action="store_true",
+        help="HTTPS with this robot's own certificate, made once in the data directory (the microphone of a page on "
+        "another computer needs HTTPS)",
+    )
+    serve.add_argument("--tls-cert", default=None, help="HTTPS with this certificate (PEM; with --tls-key)")
+    serve.add_argument("--tls-key", default=None, help="the certificate's private key (PEM)")
     serve.set_defaults(func=_serve)
 
     run = sub.add_parser("run", help="run one command headless in simulation and print the result")

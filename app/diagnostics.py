@@ -30,7 +30,7 @@ def snapshot(rt: Runtime) -> DiagnosticArray:
     statuses: list[DiagnosticStatus] = []
     if robot is not None:
         age = now - robot.wall_time_s
-        if age > STALE_AFTER_S or not rt.worker.is_alive():
+        if age > STALE_AFTER_S or robot_health(rt)[0] != "ok":
             statuses = [_stale(s, age) for s in robot.statuses]
         else:
             statuses = list(robot.statuses)
@@ -40,18 +40,31 @@ def snapshot(rt: Runtime) -> DiagnosticArray:
     )
 
 
+def robot_health(rt: Runtime) -> tuple[str, str]:
+    """("ok", "") while the robot process runs and answers; else ("worker_down" | "worker_not_answering", why)."""
+    sup = rt.supervisor
+    if not rt.worker.is_alive():
+        reason = "the robot worker is not running: the robot is not driven"
+        if sup is not None:
+            reason = sup.gave_up or reason + "; the supervisor is restarting it"
+        return "worker_down", reason
+    silent = rt.worker.silent_for_s()
+    if silent:
+        then = f"; it is restarted with the e-stop latched after {sup.frozen_grace_s:.0f} s" if sup is not None else ""
+        return "worker_not_answering", f"the robot process has not answered for {silent:.1f} s (frozen?){then}"
+    return "ok", ""
+
+
 def _worker_status(rt: Runtime) -> DiagnosticStatus:
     sup = rt.supervisor
     values: tuple[tuple[str, float | str], ...] = ()
     if sup is not None:
         values = (("restarts", sup.restarts), ("last_death", sup.last_death or ""))
-    if rt.worker.is_alive():
+    status, reason = robot_health(rt)
+    if status == "ok":
         restarted = f"; restarted {sup.restarts} times (last death: {sup.last_death})" if sup and sup.restarts else ""
         return DiagnosticStatus("links/robot_worker", Level.OK, "running" + restarted, values=values)
-    message = "the robot worker is not running: the robot is not driven"
-    if sup is not None:
-        message = sup.gave_up or message + "; the supervisor is restarting it"
-    return DiagnosticStatus("links/robot_worker", Level.ERROR, message, values=values)
+    return DiagnosticStatus("links/robot_worker", Level.ERROR, reason, values=values)
 
 
 def _stale(status: DiagnosticStatus, age_s: float) -> DiagnosticStatus:

@@ -1,4 +1,6 @@
-"""The live 3D mirror: a viser server (its own port) that shows the robot and its world as the worker reports them.
+"""The live 3D mirror: a viser server that shows the robot and its world as the worker reports them. viser has no
+login, so it listens on loopback only, on a port of the system's choosing; browsers reach it through its gate
+(`app.scene_gate`, on the port the settings name), which checks their login.
 
 The mirror only reads `RobotState` snapshots (qpos) and the model from `RobotDescription`; it recomputes body
 poses in its own MjData, so it never touches the worker's simulation. mjviser builds the scene from the model.
@@ -7,8 +9,10 @@ poses in its own MjData, so it never touches the worker's simulation. mjviser bu
 from __future__ import annotations
 
 import logging
+import ssl
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import mujoco
@@ -16,9 +20,11 @@ import numpy as np
 import viser
 from mjviser.scene import ViserMujocoScene
 
+from app.auth.scene_tokens import SceneGrant
 from app.click_goal import HINT as CLICK_HINT
-from app.click_goal import ClickToGo
+from app.click_goal import enable_clicks
 from app.perception_overlay import NavigationOverlay, PerceptionOverlay
+from app.scene_gate import ClickHandler, SceneGate
 from robot.interface import LocomotionState, RobotPort
 from robot.model import humanoid_v1
 
@@ -127,13 +133,7 @@ class GaitOverlay:
 
 class SceneMirror:
     def __init__(
-        self,
-        port: RobotPort,
-        host: str,
-        viser_port: int,
-        rate_hz: float = 30.0,
-        profile: MirrorProfile = FULL,
-        shadows: bool = False,
+        self, port: RobotPort, rate_hz: float = 30.0, profile: MirrorProfile = FULL, shadows: bool = False
     ) -> None:
         description = port.describe()
         self._port = port
@@ -141,8 +141,9 @@ class SceneMirror:
         self.profile = profile
         self.model = mirror_model(description.mjcf_xml, profile)
         self.data = mujoco.MjData(self.model)
-        self.server = viser.ViserServer(host=host, port=viser_port, label=f"humanoid mirror ({profile.name})",
-                                        verbose=False)  # fmt: skip
+        self.server = viser.ViserServer(
+            host="127.0.0.1", port=0, label=f"humanoid mirror ({profile.name})", verbose=False
+        )
         self.server.initial_camera.position = (-3.2, -2.8, 3.0)
         self.server.initial_camera.look_at = (0.0, 0.0, 0.2)
         self.scene = ViserMujocoScene(self.server, self.model, num_envs=1)
@@ -156,7 +157,7 @@ class SceneMirror:
         self.gait = GaitOverlay(self.server)
         self.perception = PerceptionOverlay(self.server)
         self.navigation = NavigationOverlay(self.server)
-        self.click_to_go = ClickToGo(self.server, port)
+        enable_clicks(self.server)
         self.server.gui.add_markdown(CLICK_HINT)
         self.updates = 0
         self._last_qpos: np.ndarray | None = None
@@ -164,7 +165,8 @@ class SceneMirror:
         self._thread = threading.Thread(target=self._run, name=f"scene-mirror-{profile.name}", daemon=True)
 
     @property
-    def port(self) -> int:
+    def upstream_port(self) -> int:
+        """viser's own port, on loopback: only the gate connects to it."""
         return int(self.server.get_port())
 
     def start(self) -> None:
@@ -214,3 +216,25 @@ class SceneMirror:
             except Exception:  # a viewer glitch must never take the mirror down for good
                 log.exception("mirror update failed")
                 time.sleep(1.0)
+
+
+def open_views(
+    port: RobotPort,
+    host: str,
+    ports: dict[str, int],
+    rate_hz: float,
+    shadows: bool,
+    verify: Callable[[str], SceneGrant | None],
+    on_click: ClickHandler | None,
+    tls: ssl.SSLContext | None = None,
+) -> tuple[dict[str, SceneMirror], dict[str, SceneGate]]:
+    """The live 3D views, each a mirror behind its gate (on `host`:`ports[profile]`), started."""
+    mirrors = {name: SceneMirror(port, rate_hz, profile=PROFILES[name], shadows=shadows) for name in ports}
+    gates = {
+        name: SceneGate(name, host, ports[name], mirror.upstream_port, verify, on_click, tls)
+        for name, mirror in mirrors.items()
+    }
+    for name in ports:
+        mirrors[name].start()
+        gates[name].start()
+    return mirrors, gates

@@ -6,9 +6,12 @@ p99 77 ms from the browser to the robot (`humanoid bench load`, py-spy). Here th
 operating system serves the web server (and the robot) first.
 
 Data flow: the robot process's state and sensor-feed messages reach this process as they came (still pickled:
-the web server does not encode them again); a click in a 3D view comes back as a command the web server submits.
-Wire protocol (one duplex pipe, pickles): parent -> child: raw ("state", ...) / ("feed", ...) messages, ("stop",);
-child -> parent: ("ready", {profile: port}), ("updates", {profile: n}), ("cmd", Command), ("fatal", text).
+the web server does not encode them again). The views' gates (`app.scene_gate`) run here too, so the pages' 3D
+traffic never touches the web server; a click in a 3D view goes back with who made it, for the web server to
+check and turn into a command.
+Wire protocol (one duplex pipe, pickles): parent -> child: raw ("state", ...) / ("feed", ...) messages,
+("revoke", login), ("stop",); child -> parent: ("ready", {profile: port}), ("updates", {profile: n}),
+("click", SceneGrant, origin, direction), ("fatal", text).
 """
 
 from __future__ import annotations
@@ -22,9 +25,11 @@ import threading
 import traceback
 from dataclasses import dataclass
 from multiprocessing.connection import Connection
-from typing import Any
 
-from robot.interface import Command, CommandReply, Level, RobotDescription, RobotState, SensorFeed
+from app.auth.scene_tokens import SceneTokens
+from app.scene_gate import ClickHandler
+from app.tls import TlsFiles
+from robot.interface import RobotDescription, RobotState, SensorFeed
 from robot.process import WorkerProcess, merge_feed
 
 log = logging.getLogger(__name__)
@@ -46,12 +51,22 @@ class RemoteMirror:
 
 
 class MirrorProcess:
-    """Starts the mirrors' process, feeds it the robot's state, and submits the commands its 3D views send."""
+    """Starts the mirrors' process, feeds it the robot's state, and hands on the clicks its 3D views take."""
 
-    def __init__(self, worker: WorkerProcess, host: str, ports: dict[str, int], rate_hz: float,
-                 shadows: bool) -> None:  # fmt: skip
+    def __init__(
+        self,
+        worker: WorkerProcess,
+        host: str,
+        ports: dict[str, int],
+        rate_hz: float,
+        shadows: bool,
+        tokens: SceneTokens,
+        on_click: ClickHandler,
+        tls: TlsFiles | None = None,
+    ) -> None:
         self._worker = worker
-        self._args = (worker.describe(), host, ports, rate_hz, shadows)
+        self._on_click = on_click
+        self._args = (worker.describe(), host, ports, rate_hz, shadows, tokens.secret, tls)
         self.mirrors: dict[str, RemoteMirror] = {}
         self._conn: Connection | None = None
         self._process: mp.process.BaseProcess | None = None
@@ -80,16 +95,22 @@ class MirrorProcess:
         self._reader = threading.Thread(target=self._read, name="scene-mirrors-reader", daemon=True)
         self._reader.start()
 
+    def revoke(self, login: str) -> None:
+        """That login ended: its tokens are refused and its viewers disconnected."""
+        self._send(("revoke", login))
+
     def stop(self) -> None:
         if self._process is None:
             return
-        with contextlib.suppress(OSError), self._send_lock:
-            self._conn.send_bytes(pickle.dumps(("stop",)))  # type: ignore[union-attr]
+        self._send(("stop",))
         self._process.join(timeout=10)
         if self._process.is_alive():
             self._process.kill()
             self._process.join(timeout=5)
         self._process = None
+
+    def _send(self, message: tuple) -> None:
+        self._forward(pickle.dumps(message))
 
     def _forward(self, raw: bytes) -> None:
         if self._process is None:
@@ -112,23 +133,15 @@ class MirrorProcess:
                 for name, count in message[1].items():
                     if name in self.mirrors:
                         self.mirrors[name].updates = count
-            elif message[0] == "cmd":  # a click in a 3D view; its outcome shows on the page like any plan's
-                threading.Thread(target=self._submit_click, args=(message[1],), daemon=True).start()
-
-    def _submit_click(self, command: Command) -> None:
-        """A refused click makes no plan to show, so the refusal is said in the events (the page lists them)."""
-        reply = self._worker.submit(command)
-        if not reply.accepted:
-            self._worker.announce("mirror/click_refused", f"3D view click refused: {reply.message}", Level.WARN,
-                                  refusal=reply.refusal.value if reply.refusal else None)  # fmt: skip
+            elif message[0] == "click":  # with who clicked; its outcome shows on the page like any plan's
+                self._on_click(*message[1:])
 
 
 class PipedPort:
-    """The part of `RobotPort` a mirror reads, fed from the pipe; `submit` sends the command to the web server."""
+    """The part of `RobotPort` a mirror reads, fed from the pipe."""
 
-    def __init__(self, description: RobotDescription, send: Any) -> None:
+    def __init__(self, description: RobotDescription) -> None:
         self._description = description
-        self._send = send
         self._state: RobotState | None = None
         self._feed = SensorFeed()
 
@@ -142,10 +155,6 @@ class PipedPort:
     def sensor_feed(self) -> SensorFeed:
         return self._feed
 
-    def submit(self, command: Command) -> CommandReply:
-        self._send(("cmd", command))
-        return CommandReply(True, "sent to the robot")
-
     def take(self, message: tuple) -> None:
         if message[0] == "state":
             self._state = message[1]
@@ -153,8 +162,16 @@ class PipedPort:
             self._feed = merge_feed(self._feed, message[1])
 
 
-def mirror_main(conn: Connection, description: RobotDescription, host: str, ports: dict[str, int], rate_hz: float,
-                shadows: bool) -> None:  # fmt: skip
+def mirror_main(
+    conn: Connection,
+    description: RobotDescription,
+    host: str,
+    ports: dict[str, int],
+    rate_hz: float,
+    shadows: bool,
+    secret: bytes,
+    tls: TlsFiles | None,
+) -> None:
     """Entry point of the mirrors' process."""
     send_lock = threading.Lock()
 
@@ -164,18 +181,25 @@ def mirror_main(conn: Connection, description: RobotDescription, host: str, port
 
     try:
         os.nice(MIRROR_NICE)
-        from app.mirror import PROFILES, SceneMirror
+        from app.mirror import open_views
 
-        port = PipedPort(description, send)
+        tokens = SceneTokens(secret)
+        port = PipedPort(description)
         port.take(pickle.loads(conn.recv_bytes()))
-        mirrors = {name: SceneMirror(port, host, viser_port, rate_hz, profile=PROFILES[name], shadows=shadows)
-                   for name, viser_port in ports.items()}  # fmt: skip
-        for mirror in mirrors.values():
-            mirror.start()
+        mirrors, gates = open_views(
+            port,
+            host,
+            ports,
+            rate_hz,
+            shadows,
+            tokens.verify,
+            on_click=lambda grant, origin, direction: send(("click", grant, origin, direction)),
+            tls=tls.server_context() if tls else None,
+        )
     except Exception:
         send(("fatal", traceback.format_exc()))
         return
-    send(("ready", {name: m.port for name, m in mirrors.items()}))
+    send(("ready", {name: gate.port for name, gate in gates.items()}))
     stop = threading.Event()
 
     def report() -> None:
@@ -192,8 +216,15 @@ def mirror_main(conn: Connection, description: RobotDescription, host: str, port
                 break
             if message[0] == "stop":
                 break
+            if message[0] == "revoke":
+                tokens.revoke(message[1])
+                for gate in gates.values():
+                    gate.revoke(message[1])
+                continue
             port.take(message)
     finally:
         stop.set()
+        for gate in gates.values():
+            gate.stop()
         for mirror in mirrors.values():
             mirror.stop()

@@ -1,4 +1,4 @@
-"""3D replay of stored sessions: a viser server of its own (like the live mirror, on another port) that shows the
+"""3D replay of stored sessions: a viser server of its own (like the live mirror, behind a gate) that shows the
 recorded robot and objects moving as they did, with play, pause, seek and speed, and plots of key signals around
 the replay's time (joint targets against positions, the centre of mass, the battery, the control tick time).
 
@@ -50,7 +50,6 @@ class ReplayStatus:
     playing: bool
     speed: float
     samples: int
-    port: int
     now: str  # the timeline entry in force at the replay's time
     frames: int  # pictures sent to the viewers so far
 
@@ -99,11 +98,12 @@ class ReplayTrack:
 class SessionReplay:
     """The replay's viser server, its controls and plots, and the thread that plays it."""
 
-    def __init__(self, factory: sessionmaker, host: str, port: int, profile: MirrorProfile = LIGHT) -> None:
+    def __init__(self, factory: sessionmaker, profile: MirrorProfile = LIGHT) -> None:
         self._factory = factory
         self._profile = profile
         self._lock = threading.RLock()
-        self.server = viser.ViserServer(host=host, port=port, label="humanoid session replay", verbose=False)
+        # on loopback: browsers come through its gate (`app.scene_gate`), which checks their login
+        self.server = viser.ViserServer(host="127.0.0.1", port=0, label="humanoid session replay", verbose=False)
         self.server.initial_camera.position = (-3.2, -2.8, 3.0)
         self.server.initial_camera.look_at = (0.0, 0.0, 0.2)
         self.server.scene.configure_environment_map(hdri=None, environment_intensity=0.0)
@@ -126,7 +126,7 @@ class SessionReplay:
         self._thread.start()
 
     @property
-    def port(self) -> int:
+    def upstream_port(self) -> int:
         return int(self.server.get_port())
 
     def stop(self) -> None:
@@ -176,7 +176,7 @@ class SessionReplay:
             return ReplayStatus(
                 session_id=self._session_id, sim_time_s=round(self._t, 3),
                 start_s=track.start if track else 0.0, end_s=track.end if track else 0.0, playing=self._playing,
-                speed=self._speed, samples=len(track.rows) if track else 0, port=self.port, now=self._now_text(),
+                speed=self._speed, samples=len(track.rows) if track else 0, now=self._now_text(),
                 frames=self.frames,
             )  # fmt: skip
 

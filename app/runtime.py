@@ -10,10 +10,13 @@ from sqlalchemy.orm import sessionmaker
 
 from app.auth.access import AccessControl
 from app.auth.control import ControlLock
+from app.auth.scene_tokens import SceneTokens
 from app.auth.store import UserStore
-from app.mirror import FULL, LIGHT, PROFILES, SceneMirror
+from app.mirror import FULL, LIGHT, SceneMirror, open_views
 from app.mirror_process import MirrorProcess, RemoteMirror
 from app.replay import SessionReplay
+from app.scene_clicks import SceneClicks
+from app.scene_gate import SceneGate
 from app.sessions.db import make_engine, make_session_factory, upgrade_to_head
 from app.sessions.maintenance import apply_retention, close_interrupted_sessions
 from app.sessions.recorder import SessionRecorder
@@ -30,15 +33,27 @@ log = logging.getLogger(__name__)
 def _maintain(db: sessionmaker, settings: Settings, live_session_id: int) -> None:
     """Every few minutes while serving: close sessions other servers left open, apply the retention settings."""
     close_interrupted_sessions(db)
-    apply_retention(db, settings.audio_dir, settings.session_retention_days, settings.session_retention_count,
-                    keep={live_session_id})  # fmt: skip
+    apply_retention(
+        db,
+        settings.audio_dir,
+        settings.session_retention_days,
+        settings.session_retention_count,
+        keep={live_session_id},
+    )
 
 
 def _open_recorder(db: sessionmaker, worker: RobotPort, settings: Settings) -> SessionRecorder:
-    recorder = SessionRecorder(db, worker, kind="serve", seed=settings.seed, backend=settings.backend,
-                               audio_dir=settings.audio_dir, camera_hz=settings.record_camera_hz,
-                               camera_width=settings.record_camera_width,
-                               maintenance=lambda: _maintain(db, settings, recorder.session_id))  # fmt: skip
+    recorder = SessionRecorder(
+        db,
+        worker,
+        kind="serve",
+        seed=settings.seed,
+        backend=settings.backend,
+        audio_dir=settings.audio_dir,
+        camera_hz=settings.record_camera_hz,
+        camera_width=settings.record_camera_width,
+        maintenance=lambda: _maintain(db, settings, recorder.session_id),
+    )
     return recorder
 
 
@@ -56,6 +71,8 @@ class Runtime:
     control: ControlLock = field(default_factory=ControlLock)  # the one operator in control
     supervisor: WorkerSupervisor | None = None  # restarts a robot process that died
     mirror_process: MirrorProcess | None = None  # the 3D mirrors, when they run in their own process
+    scene_tokens: SceneTokens = field(default_factory=SceneTokens)  # what opens the 3D views (their gates check)
+    gates: dict[str, SceneGate] = field(default_factory=dict)  # the 3D views' gates run in this process
 
     @staticmethod
     def start(settings: Settings, worker: RobotPort | None = None) -> Runtime:
@@ -69,13 +86,19 @@ class Runtime:
         if worker is None and settings.backend == "dynamixel":
             spec = HardwareSpec(settings.hardware_config(), settings.deadman_s)
             if settings.worker_process:  # its loop must not share the interpreter lock with the web server
-                worker = WorkerProcess(settings.seed, diagnostics=settings.diagnostics, disk_path=settings.data_dir,
-                                       hardware=spec)  # fmt: skip
+                worker = WorkerProcess(
+                    settings.seed, diagnostics=settings.diagnostics, disk_path=settings.data_dir, hardware=spec
+                )
             else:
                 from robot.hardware.worker import HardwareWorker
 
-                worker = HardwareWorker(spec.config, generate_world(settings.seed), diagnostics=settings.diagnostics,
-                                        disk_path=settings.data_dir, deadman_s=spec.deadman_s)  # fmt: skip
+                worker = HardwareWorker(
+                    spec.config,
+                    generate_world(settings.seed),
+                    diagnostics=settings.diagnostics,
+                    disk_path=settings.data_dir,
+                    deadman_s=spec.deadman_s,
+                )
         if worker is None:
             worker = (
                 WorkerProcess(
@@ -105,26 +128,77 @@ class Runtime:
             )
         worker.start()
         recorder = _open_recorder(db, worker, settings)
+        control, tokens, clicks = ControlLock(), SceneTokens(), SceneClicks()
         mirrors: dict[str, SceneMirror | RemoteMirror] = {}
+        gates: dict[str, SceneGate] = {}
         mirror_process = None
+        host = settings.scene_host()
         ports = {FULL.name: settings.viser_port, LIGHT.name: settings.viser_light_port}
+        tls = settings.tls_files()
         if settings.enable_mirror and isinstance(worker, WorkerProcess):  # (the robot's messages feed it directly)
-            mirror_process = MirrorProcess(worker, settings.viser_host, ports, settings.mirror_hz,
-                                           settings.mirror_shadows)  # fmt: skip
+            mirror_process = MirrorProcess(
+                worker, host, ports, settings.mirror_hz, settings.mirror_shadows, tokens, clicks.on_click, tls
+            )
             mirror_process.start()
             mirrors.update(mirror_process.mirrors)
         elif settings.enable_mirror:
-            for name, viser_port in ports.items():
-                mirrors[name] = SceneMirror(worker, settings.viser_host, viser_port, settings.mirror_hz,
-                                            profile=PROFILES[name], shadows=settings.mirror_shadows)  # fmt: skip
-                mirrors[name].start()
-        replay = SessionReplay(db, settings.viser_host, settings.replay_port) if settings.enable_mirror else None
-        rt = Runtime(settings, worker, engine, db, recorder, mirrors, replay, access=access,
-                     mirror_process=mirror_process)  # fmt: skip
+            in_process, gates = open_views(
+                worker,
+                host,
+                ports,
+                settings.mirror_hz,
+                settings.mirror_shadows,
+                tokens.verify,
+                clicks.on_click,
+                tls.server_context() if tls else None,
+            )
+            mirrors.update(in_process)
+        replay = None
+        if settings.enable_mirror:
+            replay = SessionReplay(db)
+            gates["replay"] = SceneGate(
+                "replay",
+                host,
+                settings.replay_port,
+                replay.upstream_port,
+                tokens.verify,
+                tls=tls.server_context() if tls else None,
+            )
+            gates["replay"].start()
+        rt = Runtime(
+            settings,
+            worker,
+            engine,
+            db,
+            recorder,
+            mirrors,
+            replay,
+            access=access,
+            control=control,
+            mirror_process=mirror_process,
+            scene_tokens=tokens,
+            gates=gates,
+        )
+        clicks.runtime = rt
         if settings.supervise_worker and isinstance(worker, WorkerProcess):
             rt.supervisor = WorkerSupervisor(worker, on_death=rt._session_crashed, on_restart=rt._new_session)
             rt.supervisor.start()
         return rt
+
+    def scene_port(self, view: str) -> int | None:
+        """The port browsers open a 3D view on ("full", "light", "replay"); None when it is off."""
+        if view in self.gates:
+            return self.gates[view].port
+        mirror = self.mirrors.get(view)
+        return mirror.port if isinstance(mirror, RemoteMirror) else None
+
+    def end_scene_login(self, login: str) -> None:
+        """A login ended: the 3D views stop admitting its token and disconnect its viewers."""
+        self.scene_tokens.revoke(login)
+        for gate in self.gates.values():
+            gate.revoke(login)
+        if self.mirror_process is not None:
+            self.mirror_process.revoke(login)
 
     def _session_crashed(self, why: str) -> None:
         """The robot process died: its session ends with all it had kept, as "crashed"."""
@@ -137,6 +211,8 @@ class Runtime:
     def stop(self) -> None:
         if self.supervisor is not None:
             self.supervisor.stop()
+        for gate in self.gates.values():
+            gate.stop()
         for mirror in self.mirrors.values():
             mirror.stop()
         if self.mirror_process is not None:

@@ -11,6 +11,7 @@ from typing import Literal
 from pydantic import AliasChoices, Field
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
+from app.tls import TlsFiles
 from robot.diagnostics.thresholds import Thresholds
 from robot.hardware.config import HardwareConfig, default_config, load_config
 from robot.planning.pipeline import PlannerConfig
@@ -32,7 +33,13 @@ class Settings(BaseSettings):
     )
     viser_port: int = Field(8081, ge=1, le=65535, description="port of the 3D view for browsers with a GPU")
     viser_light_port: int = Field(8082, ge=1, le=65535, description="port of the light 3D view (software WebGL)")
-    viser_host: str = Field("127.0.0.1", description="interface the viser server binds to")
+    viser_host: str = Field(
+        "",
+        description="interface the 3D views' gates listen on (empty: the app's own HOST); viser itself stays on "
+        "loopback",
+    )
+    tls_cert: str = Field("", description="HTTPS: the certificate (PEM) the server and the 3D views present")
+    tls_key: str = Field("", description="HTTPS: its private key (PEM)")
     backend: Literal["sim", "dynamixel"] = Field("sim", description="sim (MuJoCo) or dynamixel (the real robot)")
     robot_config: str = Field(str(REPO_ROOT / "robot.toml"), description="the real robot's servos (see README)")
     auth: Literal["auto", "on", "off"] = Field(
@@ -111,6 +118,13 @@ class Settings(BaseSettings):
     def data_dir(self) -> str:
         """Where recordings (and, with SQLite, the database) are kept: the disk diagnostics watch."""
         return str(Path(self.audio_dir).parent)
+
+    def scene_host(self) -> str:
+        """Where the 3D views' gates listen: where the app does, unless told otherwise."""
+        return self.viser_host or self.host
+
+    def tls_files(self) -> TlsFiles | None:
+        return TlsFiles(self.tls_cert, self.tls_key) if self.tls_cert and self.tls_key else None
 
     def voice_config(self) -> VoiceConfig:
         """The robot's microphone and speaker; its recordings wait under the audio directory for the session."""

@@ -1,4 +1,5 @@
-"""Restarts a robot process that died, safely, while the web server goes on serving.
+"""Restarts a robot process that died, or that stopped answering (frozen) for a grace period, safely, while the
+web server goes on serving.
 
 What "safely" means here: the death is said (an ERROR event, recorded with the session it ends, and the log); the
 session that was being recorded is closed with outcome "crashed", everything it had kept; the new robot process
@@ -24,6 +25,9 @@ CHECK_PERIOD_S = 0.2
 MAX_RESTARTS = 3  # within RESTART_WINDOW_S; one more death leaves the robot down
 RESTART_WINDOW_S = 300.0
 FIRST_BACKOFF_S = 0.5  # then doubled for each restart still in the window
+# A robot process silent this long is killed and restarted like a dead one. Long enough for a loaded machine's
+# hiccups (the page says "not answering" after 0.6 s already), short enough that nobody waits on a frozen robot.
+FROZEN_GRACE_S = 5.0
 
 
 class Restartable(Protocol):
@@ -31,7 +35,11 @@ class Restartable(Protocol):
 
     def is_alive(self) -> bool: ...
 
+    def silent_for_s(self) -> float: ...
+
     def restart(self) -> None: ...
+
+    def stop(self) -> None: ...
 
     def submit(self, command: EStop) -> object: ...
 
@@ -65,6 +73,7 @@ class WorkerSupervisor:
         max_restarts: int = MAX_RESTARTS,
         window_s: float = RESTART_WINDOW_S,
         first_backoff_s: float = FIRST_BACKOFF_S,
+        frozen_grace_s: float = FROZEN_GRACE_S,
     ) -> None:
         self._worker = worker
         self._on_death = on_death
@@ -72,6 +81,7 @@ class WorkerSupervisor:
         self.max_restarts = max_restarts
         self._window_s = window_s
         self._first_backoff_s = first_backoff_s
+        self.frozen_grace_s = frozen_grace_s
         self._restarts: deque[float] = deque()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -91,28 +101,34 @@ class WorkerSupervisor:
 
     def _run(self) -> None:
         while not self._stop.wait(CHECK_PERIOD_S):
-            if self.gave_up is None and not self._worker.is_alive():
-                self._recover()
+            if self.gave_up is not None:
+                continue
+            if not self._worker.is_alive():
+                self._recover(describe_exit(self._worker.exitcode))
+            elif (silent := self._worker.silent_for_s()) > self.frozen_grace_s:
+                self._recover(f"it stopped answering for {silent:.0f} s", died="stopped answering")
 
-    def _recover(self) -> None:
-        why = describe_exit(self._worker.exitcode)
+    def _recover(self, why: str, died: str = "died") -> None:
+        """Say it, close the session, and restart it (a frozen one is killed first) unless it keeps failing."""
         self.last_death = why
         now = time.monotonic()
         while self._restarts and now - self._restarts[0] > self._window_s:
             self._restarts.popleft()
         giving_up = len(self._restarts) >= self.max_restarts
         then = (
-            f"it died {len(self._restarts) + 1} times within {self._window_s / 60:.0f} min: left down; "
+            f"it failed {len(self._restarts) + 1} times within {self._window_s / 60:.0f} min: left down; "
             "restart the server to try again"
             if giving_up
             else "restarting it with the e-stop latched"
         )
-        message = f"the robot process died ({why}): {then}"
+        message = f"the robot process {died} ({why}): {then}"
         log.error(message)
         self._worker.announce("worker/died", message, Level.ERROR, cause=why, restarting=not giving_up)
         self._safely(lambda: self._on_death(why))
         if giving_up:
             self.gave_up = message
+            if self._worker.is_alive():  # frozen: it must not wake up later and go on with what it was doing
+                self._worker.stop()
             return
         backoff = self._first_backoff_s * 2 ** len(self._restarts)
         self._restarts.append(now)
@@ -126,11 +142,11 @@ class WorkerSupervisor:
                                   Level.ERROR)  # fmt: skip
             return
         self.restarts += 1
-        self._worker.submit(EStop(source="supervisor", reason="the robot process was restarted after it died"))
+        self._worker.submit(EStop(source="supervisor", reason=f"the robot process was restarted after it {died}"))
         self._safely(self._on_restart)
         self._worker.announce(
             "worker/restarted",
-            f"robot process restarted after it died ({why}); e-stop latched: release it to go on",
+            f"robot process restarted after it {died} ({why}); e-stop latched: release it to go on",
             Level.WARN,
             cause=why,
             restarts_in_window=len(self._restarts),

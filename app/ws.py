@@ -18,6 +18,7 @@ changes.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 import math
 import time
@@ -26,15 +27,17 @@ from typing import Any
 from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 
 from app.api.robot import TELEOP_MAX_SPEED_M_S, TELEOP_MAX_YAW_RATE
-from app.auth.control import ControlHeld
-from app.auth.roles import LOCAL_OPERATOR, Principal, Role
+from app.auth.control import operator_refusal
+from app.auth.roles import LOCAL_OPERATOR, Principal
 from app.browser_feed import BrowserFeed
+from app.robot_calls import ask, tell
 from app.runtime import Runtime
 from app.serialize import event_json, reply_json
-from robot.interface import EStop, OperatorHeartbeat, ReleaseEStop, StopTeleop, Teleop
+from robot.interface import Command, EStop, OperatorHeartbeat, ReleaseEStop, StopTeleop, Teleop
 
 router = APIRouter()
 MAX_MESSAGE_BYTES = 4096
+_ANSWERS: set[asyncio.Task] = set()  # replies on their way to pages (kept referenced until they are sent)
 
 
 def _client_time(message: dict[str, Any]) -> float | None:
@@ -51,17 +54,6 @@ def _number(message: dict[str, Any], key: str, bound: float) -> float:
     if abs(value) > bound:
         raise ValueError(f"{key} {value:g} is beyond {bound:g}: refused")
     return float(value)
-
-
-def _operator_refusal(rt: Runtime, who: Principal) -> str | None:
-    """Why `who` may not drive now (None: they may, and have control now)."""
-    if not who.role.allows(Role.OPERATOR):
-        return "viewers may watch and press the e-stop; this needs an operator"
-    try:
-        rt.control.ensure(who)
-    except ControlHeld as exc:
-        return str(exc)
-    return None
 
 
 def _counts_as_heartbeat(rt: Runtime, who: Principal) -> bool:
@@ -84,39 +76,56 @@ async def _receive(ws: WebSocket, rt: Runtime, drove: list[bool], who: Principal
             await ws.send_json({"type": "error", "message": "expected a JSON object with a 'type'"})
             continue
         if kind == "estop":
-            relayed = time.time()
-            reply = rt.worker.submit(EStop(source="browser", client_time_s=_client_time(message), relayed_at_s=relayed))
-            await ws.send_json({"type": "estop_ack", "server_time_s": time.time(), **reply_json(reply)})
+            command = EStop(source="browser", client_time_s=_client_time(message), relayed_at_s=time.time())
+            _answer_later(ws, rt, command, "estop_ack", server_time=True)
         elif kind == "estop_release":
-            if refusal := _operator_refusal(rt, who):
+            if refusal := operator_refusal(rt.control, who):
                 await ws.send_json({"type": "estop_release_ack", "accepted": False, "message": refusal})
                 continue
-            reply = rt.worker.submit(ReleaseEStop(source="browser"))
-            await ws.send_json({"type": "estop_release_ack", **reply_json(reply)})
+            _answer_later(ws, rt, ReleaseEStop(source="browser"), "estop_release_ack")
         elif kind == "teleop":
             try:
-                velocity = (_number(message, "vx", TELEOP_MAX_SPEED_M_S), _number(message, "vy", TELEOP_MAX_SPEED_M_S),
-                            _number(message, "yaw_rate", TELEOP_MAX_YAW_RATE))  # fmt: skip
+                velocity = (
+                    _number(message, "vx", TELEOP_MAX_SPEED_M_S),
+                    _number(message, "vy", TELEOP_MAX_SPEED_M_S),
+                    _number(message, "yaw_rate", TELEOP_MAX_YAW_RATE),
+                )
             except ValueError as exc:
                 await ws.send_json({"type": "teleop_ack", "accepted": False, "message": str(exc)})
                 continue
-            if refusal := _operator_refusal(rt, who):
+            if refusal := operator_refusal(rt.control, who):
                 await ws.send_json({"type": "teleop_ack", "accepted": False, "message": refusal})
                 continue
-            reply = rt.worker.submit(Teleop(*velocity, source="browser"))
-            if reply.accepted:
-                drove[0] = True
-            else:
-                await ws.send_json({"type": "teleop_ack", **reply_json(reply)})
+            drove[0] = True  # (a refused one changes nothing: stopping on close is harmless)
+            _answer_later(ws, rt, Teleop(*velocity, source="browser"), "teleop_ack", only_refusals=True)
         elif kind == "teleop_stop":
-            rt.worker.submit(StopTeleop(source="browser"))
+            tell(rt.worker, StopTeleop(source="browser"))
         elif kind == "heartbeat":
             if _counts_as_heartbeat(rt, who):
-                rt.worker.submit(OperatorHeartbeat(source="browser"))
+                tell(rt.worker, OperatorHeartbeat(source="browser"))
         elif kind == "ping":
             await ws.send_json({"type": "pong", "t": message.get("t"), "server_time_s": time.time()})
         else:
             await ws.send_json({"type": "error", "message": f"unknown message type {kind!r}"})
+
+
+def _answer_later(
+    ws: WebSocket, rt: Runtime, command: Command, ack: str, server_time: bool = False, only_refusals: bool = False
+) -> None:
+    """Send `command` now and answer the page when the robot replies, in a task of its own: the next message (an
+    e-stop after a teleop, say) is read at once, whatever the robot process is doing."""
+
+    async def answer() -> None:
+        reply = await ask(rt.worker, command)
+        if only_refusals and reply.accepted:
+            return
+        extra = {"server_time_s": time.time()} if server_time else {}
+        with contextlib.suppress(Exception):  # the page may have gone meanwhile (each server says so its own way)
+            await ws.send_json({"type": ack, **extra, **reply_json(reply)})
+
+    task = asyncio.get_running_loop().create_task(answer())
+    _ANSWERS.add(task)
+    task.add_done_callback(_ANSWERS.discard)
 
 
 async def _send(ws: WebSocket, rt: Runtime, feed: BrowserFeed) -> None:
@@ -177,4 +186,4 @@ async def robot_socket(ws: WebSocket) -> None:
         for task in tasks:
             task.cancel()
         if drove[0]:
-            rt.worker.submit(StopTeleop(source="browser-disconnect"))
+            tell(rt.worker, StopTeleop(source="browser-disconnect"))

@@ -7,6 +7,7 @@ these cross a pipe unchanged.
 from __future__ import annotations
 
 from collections.abc import Iterable
+from concurrent.futures import Future
 from dataclasses import dataclass, field
 from enum import IntEnum, StrEnum
 from typing import TYPE_CHECKING, Any, Protocol
@@ -272,6 +273,7 @@ class Refusal(StrEnum):
     BUSY = "busy"  # 409: the robot is doing something else (a plan, teleop, walking)
     UNSUPPORTED = "unsupported"  # 501: not possible with this backend (e.g. reset on hardware)
     UNAVAILABLE = "unavailable"  # 503: the worker does not answer
+    FORBIDDEN = "forbidden"  # 403: not for this caller (a viewer; refused by the server, before the robot)
 
 
 @dataclass(frozen=True)
@@ -586,9 +588,29 @@ class RobotPort(Protocol):
 
     def is_alive(self) -> bool: ...
 
-    def submit(self, command: Command) -> CommandReply: ...
+    def submit(self, command: Command) -> CommandReply:
+        """Blocks until the robot answers (planning may take long): for threads, never for an event loop."""
+        ...
+
+    def submit_async(self, command: Command) -> Future[CommandReply]:
+        """Sends and returns at once; the reply comes in the future (what the web server's event loop uses)."""
+        ...
+
+    @property
+    def pid(self) -> int | None:
+        """The robot's process (None while it is not running)."""
+        ...
+
+    def silent_for_s(self) -> float:
+        """How long a running robot has not answered (0 while it answers): a frozen robot process, not a dead one."""
+        ...
 
     def state(self) -> RobotState: ...
+
+    def announce(self, kind: str, message: str, level: Level = Level.OK, **data: Any) -> Event:
+        """An event from the server about the robot (a refused 3D-view click, the process restarted), said to
+        every subscriber like the robot's own."""
+        ...
 
     def subscribe(self) -> EventSubscription: ...
 

@@ -9,6 +9,11 @@ Wire protocol over one duplex pipe (pickled tuples):
   parent -> child: ("cmd", id, Command) | ("stop",)
   child -> parent: ("ready", RobotDescription, RobotState) | ("reply", id, CommandReply) | ("state", RobotState)
                    | ("event", Event) | ("feed", SensorFeed: only the parts that changed) | ("fatal", str)
+                   | ("beat",) (when nothing else was sent for BEAT_PERIOD_S: the child is answering)
+
+The parent never blocks on the child: `submit_async` sends and hands back a future, and a child that has sent
+nothing for `UNRESPONSIVE_AFTER_S` (frozen, not dead) is said to be not answering: commands other than the e-stop
+are refused at once instead of queueing behind it.
 """
 
 from __future__ import annotations
@@ -19,6 +24,7 @@ import logging
 import multiprocessing as mp
 import pickle
 import threading
+import time
 import traceback
 from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -69,6 +75,10 @@ STATE_PERIOD_S = 0.02
 # Planning may take a while (an LLM's timeout, then a repair, then the rules); the e-stop never waits behind it.
 REPLY_TIMEOUT_S = 90.0
 STARTUP_TIMEOUT_S = 180.0
+# The child says it is there at least this often (state goes at 50 Hz while anything moves; a beat otherwise).
+BEAT_PERIOD_S = 0.1
+# Silent this long: the robot process is not answering (frozen or starved), noticed well within a second.
+UNRESPONSIVE_AFTER_S = 0.6
 # Commands that must never queue behind a slow one: handled inline by the child's receiving thread.
 _IMMEDIATE = (EStop, ReleaseEStop, CancelPlan, Teleop, StopTeleop, SetPosture, ResetRobot, PlaceObstacle, PausePlan,
               ApprovePlan, ResumePlan, SetApproval, InjectFault, SetTorque, OperatorHeartbeat)  # fmt: skip
@@ -124,6 +134,7 @@ class WorkerProcess:
         self._conn: Connection | None = None
         self._reader: threading.Thread | None = None
         self._alive = False
+        self._last_heard = time.monotonic()
         self._taps: list[Callable[[bytes], None]] = []
 
     # lifecycle -------------------------------------------------------------------------------------------------
@@ -165,6 +176,7 @@ class WorkerProcess:
             raise RuntimeError(f"the robot worker failed to start:\n{message[1]}")
         _, self._description, initial_state = message
         self._board.publish(initial_state)
+        self._last_heard = time.monotonic()
         self._alive = True
         self._reader = threading.Thread(target=self._read, name="robot-worker-reader", daemon=True)
         self._reader.start()
@@ -227,24 +239,61 @@ class WorkerProcess:
     def is_alive(self) -> bool:
         return self._alive and self._process is not None and self._process.is_alive()
 
+    def silent_for_s(self) -> float:
+        """How long the running robot process has sent nothing (0 while it answers, or when it is not running)."""
+        if not self.is_alive():
+            return 0.0
+        silent = time.monotonic() - self._last_heard
+        return silent if silent > UNRESPONSIVE_AFTER_S else 0.0
+
     # RobotPort -------------------------------------------------------------------------------------------------
 
     def submit(self, command: Command) -> CommandReply:
-        if not self._alive:
-            return CommandReply(False, "the robot worker is not running", Refusal.UNAVAILABLE)
-        request_id = next(self._ids)
+        try:
+            return self.submit_async(command).result(timeout=REPLY_TIMEOUT_S)
+        except FutureTimeout:
+            return CommandReply(False, "the robot worker did not answer", Refusal.UNAVAILABLE)
+
+    def submit_async(self, command: Command) -> Future[CommandReply]:
+        """Send `command` and return at once: the reply comes in the future. Never blocks the caller (the web
+        server's event loop calls this): a robot process that is not answering gets only e-stops, sent from a
+        thread of their own, and everything else is refused."""
         future: Future[CommandReply] = Future()
+        if not self._alive:
+            future.set_result(CommandReply(False, "the robot worker is not running", Refusal.UNAVAILABLE))
+            return future
+        silent = self.silent_for_s()
+        if silent and not isinstance(command, EStop):
+            future.set_result(
+                CommandReply(False, f"the robot process is not answering ({silent:.1f} s)", Refusal.UNAVAILABLE)
+            )
+            return future
+        request_id = next(self._ids)
         with self._pending_lock:
             self._pending[request_id] = future
+        future.add_done_callback(lambda _: self._forget(request_id))
+        if silent:  # the pipe may be full: a blocked send must not hold the caller
+            threading.Thread(target=self._send_command, args=(request_id, command), daemon=True).start()
+        else:
+            self._send_command(request_id, command)
+        return future
+
+    def _send_command(self, request_id: int, command: Command) -> None:
         try:
             with self._send_lock:
                 self._conn.send(("cmd", request_id, command))  # type: ignore[union-attr]
-            return future.result(timeout=REPLY_TIMEOUT_S)
-        except (OSError, FutureTimeout):
-            return CommandReply(False, "the robot worker did not answer", Refusal.UNAVAILABLE)
-        finally:
-            with self._pending_lock:
-                self._pending.pop(request_id, None)
+        except OSError:
+            self._answer(request_id, CommandReply(False, "the robot worker did not answer", Refusal.UNAVAILABLE))
+
+    def _answer(self, request_id: int, reply: CommandReply) -> None:
+        with self._pending_lock:
+            future = self._pending.get(request_id)
+        if future is not None and not future.done():
+            future.set_result(reply)
+
+    def _forget(self, request_id: int) -> None:
+        with self._pending_lock:
+            self._pending.pop(request_id, None)
 
     def state(self) -> RobotState:
         return self._board.latest()
@@ -286,6 +335,7 @@ class WorkerProcess:
                 raw = self._conn.recv_bytes()
             except (EOFError, OSError):
                 break
+            self._last_heard = time.monotonic()
             message = pickle.loads(raw)
             kind = message[0]
             if kind in ("state", "feed"):
@@ -302,15 +352,13 @@ class WorkerProcess:
             elif kind == "feed":
                 self._feed = merge_feed(self._feed, message[1])
             elif kind == "reply":
-                with self._pending_lock:
-                    future = self._pending.get(message[1])
-                if future is not None and not future.done():
-                    future.set_result(message[2])
+                self._answer(message[1], message[2])
         self._alive = False
         with self._pending_lock:
-            for future in self._pending.values():
-                if not future.done():
-                    future.set_result(CommandReply(False, "the robot worker exited", Refusal.UNAVAILABLE))
+            pending = list(self._pending.values())
+        for future in pending:
+            if not future.done():
+                future.set_result(CommandReply(False, "the robot worker exited", Refusal.UNAVAILABLE))
 
 
 def merge_feed(current: SensorFeed, changed: SensorFeed) -> SensorFeed:
@@ -408,7 +456,14 @@ def child_main(
         conn.close()
 
 
-def _forward_state_and_events(worker: Any, subscription: Subscription, send: Any, stop: threading.Event) -> None:
+def _forward_state_and_events(worker: Any, subscription: Subscription, send_raw: Any, stop: threading.Event) -> None:
+    last_sent = time.monotonic()
+
+    def send(message: tuple) -> None:
+        nonlocal last_sent
+        send_raw(message)
+        last_sent = time.monotonic()
+
     last_state = None
     last_feed = SensorFeed()
     last_diagnostics = None
@@ -416,6 +471,8 @@ def _forward_state_and_events(worker: Any, subscription: Subscription, send: Any
     while not stop.is_set():
         event = subscription.get(timeout=STATE_PERIOD_S)
         try:
+            if time.monotonic() - last_sent > BEAT_PERIOD_S:
+                send(("beat",))  # nothing changed for a while: still here
             while event is not None:
                 send(("event", event))
                 event = subscription.get(timeout=0)

@@ -35,6 +35,7 @@ from robot.control.whole_body import UPPER_BODY_JOINTS
 from robot.diagnostics.robot_sources import RobotDiagnostics, RobotReadings
 from robot.diagnostics.thresholds import Thresholds
 from robot.events import EventBus, Subscription
+from robot.in_process import InProcessPort
 from robot.interface import (
     ApprovePlan,
     CancelPlan,
@@ -163,7 +164,7 @@ class _Job:
 WALK_TO_STAND_SPEED_RAD_S = 0.4
 
 
-class RobotWorker:
+class RobotWorker(InProcessPort):
     """Runs the robot. Use `start()`, then talk to it only through the `RobotPort` methods."""
 
     def __init__(
@@ -368,6 +369,10 @@ class RobotWorker:
 
     def state(self) -> RobotState:
         return self._board.latest()
+
+    def announce(self, kind: str, message: str, level: Level = Level.OK, **data: Any) -> Event:
+        """An event from the server about the robot (e.g. a refused 3D-view click), said like the robot's own."""
+        return self._bus.publish(kind, message, level, **data)
 
     def subscribe(self) -> Subscription:
         return self._bus.subscribe()

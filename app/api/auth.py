@@ -11,6 +11,7 @@ from app.api.deps import principal, runtime
 from app.auth.access import COOKIE_NAME, LOGIN_TTL_S, LoginThrottled
 from app.auth.control import ControlHeld
 from app.auth.roles import Principal, Role
+from app.auth.scene_tokens import login_id
 from app.runtime import Runtime
 
 router = APIRouter(prefix="/api", tags=["access"])
@@ -56,8 +57,12 @@ def login(body: LoginIn, request: Request, response: Response, rt: RuntimeDep) -
 
 @router.post("/auth/logout")
 def logout(request: Request, response: Response, rt: RuntimeDep) -> dict[str, Any]:
+    """Ends this login: its cookie, and its 3D views (their token is refused, their viewers disconnected)."""
+    cookie = request.cookies.get(COOKIE_NAME)
     if rt.access is not None:
-        rt.access.logout(request.cookies.get(COOKIE_NAME))
+        rt.access.logout(cookie)
+    if cookie:
+        rt.end_scene_login(login_id(cookie))
     response.delete_cookie(COOKIE_NAME)
     return {"logged_out": True}
 

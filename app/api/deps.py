@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from fastapi import Depends, HTTPException, Request
 
-from app.auth.control import ControlHeld
+from app.auth.control import VIEWER_REFUSAL, ControlHeld
 from app.auth.roles import Principal, Role
 from app.runtime import Runtime
 from app.serialize import reply_json
@@ -19,6 +19,7 @@ REFUSAL_STATUS = {
     Refusal.UNSUPPORTED: 501,
     Refusal.INVALID: 422,
     Refusal.UNAVAILABLE: 503,
+    Refusal.FORBIDDEN: 403,
 }
 
 
@@ -46,7 +47,7 @@ def require_operator(request: Request) -> Principal:
     operator has control."""
     who = principal(request)
     if not who.role.allows(Role.OPERATOR):
-        raise HTTPException(403, detail={"message": "viewers may watch and press the e-stop; this needs an operator"})
+        raise HTTPException(403, detail={"message": VIEWER_REFUSAL})
     try:
         runtime(request).control.ensure(who)
     except ControlHeld as exc:

@@ -10,6 +10,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from app.api.deps import Operator, raise_if_refused, runtime
 from app.diagnostics import diagnostics_json, prometheus_text, snapshot
+from app.robot_calls import ask
 from app.runtime import Runtime
 from app.serialize import reply_json
 from robot.interface import Fault, InjectFault
@@ -39,9 +40,9 @@ class FaultIn(BaseModel):
 
 
 @router.post("/api/sim/faults", dependencies=[Operator])
-def inject_fault(body: FaultIn, rt: RuntimeDep) -> dict[str, Any]:
+async def inject_fault(body: FaultIn, rt: RuntimeDep) -> dict[str, Any]:
     """Simulation: give the robot a fault (a servo overheating or jammed, the IMU lost, a sensor silent, the control
     loop hanging, a flat battery) or clear them all; 501 on hardware, 422 for an unknown servo."""
-    reply = rt.worker.submit(InjectFault(body.fault, body.target, body.value))
+    reply = await ask(rt.worker, InjectFault(body.fault, body.target, body.value))
     raise_if_refused(reply)
     return reply_json(reply)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import dataclasses
 import time
 from typing import Annotated, Any
@@ -10,6 +11,8 @@ from fastapi import APIRouter, Depends, HTTPException, Response
 from pydantic import BaseModel, ConfigDict, Field
 
 from app.api.deps import Operator, raise_if_refused, runtime
+from app.diagnostics import robot_health
+from app.robot_calls import IMMEDIATE_TIMEOUT_S, PLANNING_TIMEOUT_S, ask
 from app.runtime import Runtime
 from app.serialize import event_json, reply_json, state_json
 from robot.interface import (
@@ -39,9 +42,9 @@ router = APIRouter(prefix="/api", tags=["robot"])
 RuntimeDep = Annotated[Runtime, Depends(runtime)]
 
 
-def _accepted(rt: Runtime, command: Command) -> dict[str, Any]:
+async def _accepted(rt: Runtime, command: Command, timeout_s: float = IMMEDIATE_TIMEOUT_S) -> dict[str, Any]:
     """Submit a command; its reply as JSON, or the HTTP error its refusal maps to."""
-    reply = rt.worker.submit(command)
+    reply = await ask(rt.worker, command, timeout_s)
     raise_if_refused(reply)
     return reply_json(reply)
 
@@ -108,20 +111,24 @@ class PostureIn(BaseModel):
 
 
 @router.get("/health")
-def health(rt: RuntimeDep, response: Response) -> dict[str, Any]:
-    """200 while the robot worker runs; 503 with status "worker_down" when it does not (the robot is not driven)."""
+async def health(rt: RuntimeDep, response: Response) -> dict[str, Any]:
+    """200 while the robot worker runs and answers; 503 with the status and the reason when it does not:
+    "worker_down" (not running: the robot is not driven) or "worker_not_answering" (frozen: noticed within a
+    second; the supervisor restarts it after a grace period)."""
     state = rt.worker.state()
-    alive = rt.worker.is_alive()
-    if not alive:
+    status, reason = robot_health(rt)
+    if status != "ok":
         response.status_code = 503
     return {
-        "status": "ok" if alive else "worker_down",
+        "status": status,
+        "reason": reason,
+        "robot_pid": rt.worker.pid,
         "mode": state.mode.value,
         "estop_latched": state.estop_latched,
         "sim_time_s": state.sim_time_s,
         "control": state_json(state)["control"],
         "session_id": rt.recorder.session_id,
-        "mirrors": {name: {"port": m.port, "updates": m.updates} for name, m in rt.mirrors.items()},
+        "mirrors": {name: {"port": rt.scene_port(name), "updates": m.updates} for name, m in rt.mirrors.items()},
     }
 
 
@@ -129,8 +136,8 @@ def health(rt: RuntimeDep, response: Response) -> dict[str, Any]:
 def config(rt: RuntimeDep) -> dict[str, Any]:
     description = rt.worker.describe()
     return {
-        "viser_ports": {name: m.port for name, m in rt.mirrors.items()},
-        "replay_port": rt.replay.port if rt.replay is not None else None,
+        "viser_ports": {name: rt.scene_port(name) for name in rt.mirrors},
+        "replay_port": rt.scene_port("replay"),
         "mirror_software_dpr": rt.settings.mirror_software_dpr,
         "seed": description.seed,
         "robot": description.model_name,
@@ -159,88 +166,88 @@ def events(rt: RuntimeDep) -> list[dict[str, Any]]:
 
 
 @router.post("/commands", status_code=202, dependencies=[Operator])
-def post_command(body: CommandIn, rt: RuntimeDep) -> dict[str, Any]:
+async def post_command(body: CommandIn, rt: RuntimeDep) -> dict[str, Any]:
     """Plan (or check the given plan) and start executing it. 422: not understood or invalid; 409: e-stop."""
     received = time.time()  # (recorded as when it came, before the plan made of it)
     if body.plan is not None:
-        reply = rt.worker.submit(ExecutePlan(body.plan, body.text, command_id=body.command_id))
+        command: Command = ExecutePlan(body.plan, body.text, command_id=body.command_id)
     elif body.command_id is not None:
         raise HTTPException(422, detail={"message": "command_id revises a plan: send the edited plan with it"})
     else:
-        reply = rt.worker.submit(RunCommand(body.text))
-    rt.recorder.record_command(body.text or "(plan)", body.source, reply, received_at=received)
+        command = RunCommand(body.text)
+    reply = await ask(rt.worker, command, PLANNING_TIMEOUT_S)
+    await asyncio.to_thread(rt.recorder.record_command, body.text or "(plan)", body.source, reply, received)
     raise_if_refused(reply)
     return reply_json(reply)
 
 
 @router.post("/replan", status_code=202, dependencies=[Operator])
-def replan(rt: RuntimeDep) -> dict[str, Any]:
+async def replan(rt: RuntimeDep) -> dict[str, Any]:
     """Re-run the planner for the current command from the current state."""
-    return _accepted(rt, Replan())
+    return await _accepted(rt, Replan(), PLANNING_TIMEOUT_S)
 
 
 @router.post("/plan/cancel", dependencies=[Operator])
-def cancel_plan(rt: RuntimeDep) -> dict[str, Any]:
+async def cancel_plan(rt: RuntimeDep) -> dict[str, Any]:
     """Stop the running plan, or reject the one awaiting approval; the robot stands where it is."""
-    return reply_json(rt.worker.submit(CancelPlan()))
+    return reply_json(await ask(rt.worker, CancelPlan()))
 
 
 @router.post("/plan/approve", dependencies=[Operator])
-def approve_plan(rt: RuntimeDep, body: ApproveIn | None = None) -> dict[str, Any]:
+async def approve_plan(rt: RuntimeDep, body: ApproveIn | None = None) -> dict[str, Any]:
     """Run the plan awaiting approval. 409 when none awaits; 422 when `plan_id` is not the one that does."""
-    return _accepted(rt, ApprovePlan((body or ApproveIn()).plan_id))
+    return await _accepted(rt, ApprovePlan((body or ApproveIn()).plan_id))
 
 
 @router.post("/plan/pause", dependencies=[Operator])
-def pause_plan(rt: RuntimeDep) -> dict[str, Any]:
+async def pause_plan(rt: RuntimeDep) -> dict[str, Any]:
     """Interrupt the running step and stand still; 409 when no plan runs."""
-    return _accepted(rt, PausePlan())
+    return await _accepted(rt, PausePlan())
 
 
 @router.post("/plan/resume", dependencies=[Operator])
-def resume_plan(rt: RuntimeDep) -> dict[str, Any]:
+async def resume_plan(rt: RuntimeDep) -> dict[str, Any]:
     """Run the paused step again (from the robot's state now) and go on; 409 when no plan is paused."""
-    return _accepted(rt, ResumePlan())
+    return await _accepted(rt, ResumePlan())
 
 
 @router.put("/plan/approval", dependencies=[Operator])
-def set_approval(body: ApprovalIn, rt: RuntimeDep) -> dict[str, Any]:
+async def set_approval(body: ApprovalIn, rt: RuntimeDep) -> dict[str, Any]:
     """Whether plans (automatic replans too) wait for the operator's approval before they run."""
-    return reply_json(rt.worker.submit(SetApproval(body.required)))
+    return reply_json(await ask(rt.worker, SetApproval(body.required)))
 
 
 @router.post("/estop")
-def estop(rt: RuntimeDep, body: EStopIn | None = None) -> dict[str, Any]:
+async def estop(rt: RuntimeDep, body: EStopIn | None = None) -> dict[str, Any]:
     """Latch the e-stop: cancel the plan and hold position. Idempotent."""
     relayed = time.time()
     body = body or EStopIn()
-    return reply_json(
-        rt.worker.submit(EStop(source=body.source, client_time_s=body.client_time_s, relayed_at_s=relayed))
-    )
+    command = EStop(source=body.source, client_time_s=body.client_time_s, relayed_at_s=relayed)
+    return reply_json(await ask(rt.worker, command))
 
 
 @router.post("/estop/reset", dependencies=[Operator])
-def estop_reset(rt: RuntimeDep) -> dict[str, Any]:
+async def estop_reset(rt: RuntimeDep) -> dict[str, Any]:
     """Release a latched e-stop. Never restarts motion: a new command or a replan does."""
-    return _accepted(rt, ReleaseEStop(source="api"))
+    return await _accepted(rt, ReleaseEStop(source="api"))
 
 
 @router.post("/teleop", dependencies=[Operator])
-def teleop(body: TeleopIn, rt: RuntimeDep) -> dict[str, Any]:
+async def teleop(body: TeleopIn, rt: RuntimeDep) -> dict[str, Any]:
     """Drive the robot's velocity (409 while a plan runs, after a fall or under e-stop)."""
-    return _accepted(rt, Teleop(body.vx, body.vy, body.yaw_rate, body.source))
+    return await _accepted(rt, Teleop(body.vx, body.vy, body.yaw_rate, body.source))
 
 
 @router.post("/teleop/stop")
-def teleop_stop(rt: RuntimeDep) -> dict[str, Any]:
+async def teleop_stop(rt: RuntimeDep) -> dict[str, Any]:
     """Input ended: decelerate and stop."""
-    return reply_json(rt.worker.submit(StopTeleop(source="api")))
+    return reply_json(await ask(rt.worker, StopTeleop(source="api")))
 
 
 @router.post("/posture", dependencies=[Operator])
-def posture(body: PostureIn, rt: RuntimeDep) -> dict[str, Any]:
+async def posture(body: PostureIn, rt: RuntimeDep) -> dict[str, Any]:
     """Stand (the walk-ready stance) or crouch; 409 while walking, running a plan, or under e-stop."""
-    return _accepted(rt, SetPosture(body.posture))
+    return await _accepted(rt, SetPosture(body.posture))
 
 
 class ObstacleIn(BaseModel):
@@ -252,9 +259,9 @@ class ObstacleIn(BaseModel):
 
 
 @router.post("/sim/obstacles", status_code=202, dependencies=[Operator])
-def place_obstacle(body: ObstacleIn, rt: RuntimeDep) -> dict[str, Any]:
+async def place_obstacle(body: ObstacleIn, rt: RuntimeDep) -> dict[str, Any]:
     """Simulation: drop an obstacle into the world (e.g. across the robot's path, to see it replan)."""
-    return _accepted(rt, PlaceObstacle(body.x, body.y))
+    return await _accepted(rt, PlaceObstacle(body.x, body.y))
 
 
 class TorqueIn(BaseModel):
@@ -263,20 +270,20 @@ class TorqueIn(BaseModel):
 
 
 @router.post("/torque", dependencies=[Operator])
-def torque(body: TorqueIn, rt: RuntimeDep) -> dict[str, Any]:
+async def torque(body: TorqueIn, rt: RuntimeDep) -> dict[str, Any]:
     """Real robot: every servo's torque on (it first holds where it stands) or off; 501 in simulation, 409 while
     the e-stop is latched."""
-    return _accepted(rt, SetTorque(body.enabled, source="api"))
+    return await _accepted(rt, SetTorque(body.enabled, source="api"))
 
 
 @router.post("/heartbeat", dependencies=[Operator])
-def heartbeat(rt: RuntimeDep) -> dict[str, Any]:
+async def heartbeat(rt: RuntimeDep) -> dict[str, Any]:
     """The operator deadman for scripts (the page sends its own over the WebSocket): on the real robot, torque
     stays on only while a heartbeat comes at least every `HUMANOID_DEADMAN_S` (1.5 s)."""
-    return _accepted(rt, OperatorHeartbeat(source="api"))
+    return await _accepted(rt, OperatorHeartbeat(source="api"))
 
 
 @router.post("/reset", dependencies=[Operator])
-def reset(rt: RuntimeDep) -> dict[str, Any]:
+async def reset(rt: RuntimeDep) -> dict[str, Any]:
     """Simulation: put the robot back standing at its start pose (after a fall); 501 on hardware."""
-    return _accepted(rt, ResetRobot())
+    return await _accepted(rt, ResetRobot())

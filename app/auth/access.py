@@ -124,6 +124,12 @@ class AccessControl:
             self._logins = {k: v for k, v in self._logins.items() if v[1] > time.time()}
         return principal, cookie
 
+    def login_expiry(self, cookie: str) -> float | None:
+        """When the login behind `cookie` ends (Unix time), or None if it is not a login."""
+        with self._lock:
+            entry = self._logins.get(token_digest(cookie))
+        return entry[1] if entry is not None else None
+
     def logout(self, cookie: str | None) -> None:
         if cookie:
             with self._lock:

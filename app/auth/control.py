@@ -8,7 +8,9 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from app.auth.roles import Principal
+from app.auth.roles import Principal, Role
+
+VIEWER_REFUSAL = "viewers may watch and press the e-stop; this needs an operator"
 
 
 @dataclass(frozen=True)
@@ -65,3 +67,15 @@ class ControlLock:
             self._holder = None
         self._on_change(f"{who.name} released control")
         return True
+
+
+def operator_refusal(control: ControlLock, who: Principal) -> str | None:
+    """Why `who` may not command the robot now (None: they may, and have control now, taking it if it was free).
+    The one rule for the API, the WebSocket and clicks in the 3D views."""
+    if not who.role.allows(Role.OPERATOR):
+        return VIEWER_REFUSAL
+    try:
+        control.ensure(who)
+    except ControlHeld as exc:
+        return str(exc)
+    return None

@@ -70,7 +70,7 @@ async def _count(socket: Any, on_message: Any, stop: asyncio.Event) -> None:
         on_message(message)
 
 
-async def _viewer(base: str, mirror_port: int, stats: ViewerStats, stop: asyncio.Event) -> None:
+async def _viewer(base: str, mirror_url: str, stats: ViewerStats, stop: asyncio.Event) -> None:
     ws_base = base.replace("http://", "ws://")
 
     def on_robot(message: str | bytes) -> None:
@@ -89,9 +89,7 @@ async def _viewer(base: str, mirror_port: int, stats: ViewerStats, stop: asyncio
         async with (
             websockets.connect(ws_base + "/ws", max_size=None) as robot,
             websockets.connect(ws_base + "/ws/camera", max_size=None) as camera,
-            websockets.connect(
-                f"ws://127.0.0.1:{mirror_port}", max_size=None, subprotocols=[f"viser-v{viser.__version__}"]
-            ) as mirror,  # fmt: skip
+            websockets.connect(mirror_url, max_size=None, subprotocols=[f"viser-v{viser.__version__}"]) as mirror,
         ):
             stats.connected = True
             await asyncio.gather(_count(robot, on_robot, stop), _count(camera, on_camera, stop),
@@ -180,7 +178,9 @@ async def _load(base: str, mirror_ports: tuple[int, int], viewers: int, presses:
                 settle_s: float) -> tuple[list[ViewerStats], OperatorStats, float]:  # fmt: skip
     stop = asyncio.Event()
     watching = [ViewerStats() for _ in range(viewers)]
-    tasks = [asyncio.create_task(_viewer(base, mirror_ports[i % 2], s, stop)) for i, s in enumerate(watching)]
+    token = httpx.get(base + "/api/scene", timeout=10).json()["token"]  # (the 3D views' gates admit a login)
+    urls = [f"ws://127.0.0.1:{port}/s/{token}" for port in mirror_ports]
+    tasks = [asyncio.create_task(_viewer(base, urls[i % 2], s, stop)) for i, s in enumerate(watching)]
     await asyncio.sleep(settle_s)  # every viewer connected and its first scene sent
     operator = OperatorStats()
     started = time.monotonic()

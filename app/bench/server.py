@@ -24,15 +24,24 @@ def free_port() -> int:
 class ServerProcess:
     """`with ServerProcess(workdir) as server:` gives a running app at `server.url`, stopped on exit."""
 
-    def __init__(self, workdir: Path, seed: int = 0, extra_env: dict[str, str] | None = None,
-                 servo_port: str | None = None) -> None:  # fmt: skip
-        """`servo_port`: serve the real robot (`--backend dynamixel`) on that serial device (or the emulator's)."""
+    def __init__(
+        self,
+        workdir: Path,
+        seed: int = 0,
+        extra_env: dict[str, str] | None = None,
+        servo_port: str | None = None,
+        tls: bool = False,
+    ) -> None:
+        """`servo_port`: serve the real robot (`--backend dynamixel`) on that serial device (or the emulator's);
+        `tls`: HTTPS with the robot's own certificate (its CA, `self.ca`, is what clients trust)."""
         self.workdir = Path(workdir)
         self.port = free_port()
         self.viser_port = free_port()
         self.viser_light_port = free_port()
         self.replay_port = free_port()
-        self.url = f"http://127.0.0.1:{self.port}"
+        self.tls = tls
+        self.url = f"{'https' if tls else 'http'}://127.0.0.1:{self.port}"
+        self.ca = self.workdir / "tls" / "ca.pem"
         self.seed = seed
         self.servo_port = servo_port
         self.log_path = self.workdir / "server.log"
@@ -49,18 +58,31 @@ class ServerProcess:
     def __enter__(self) -> ServerProcess:
         self.workdir.mkdir(parents=True, exist_ok=True)
         log = self.log_path.open("a")
-        command = [sys.executable, "-m", "app.cli", "serve", "--port", str(self.port),
-                   "--viser-port", str(self.viser_port), "--seed", str(self.seed)]  # fmt: skip
+        command = [
+            sys.executable,
+            "-m",
+            "app.cli",
+            "serve",
+            "--port",
+            str(self.port),
+            "--viser-port",
+            str(self.viser_port),
+            "--seed",
+            str(self.seed),
+        ]
         if self.servo_port:
             command[4:6] = ["--backend", "dynamixel", "--port", self.servo_port, "--http-port", str(self.port)]
+        if self.tls:
+            command.append("--tls")
         self._process = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, env=self._env)
         deadline = time.monotonic() + STARTUP_TIMEOUT_S
         while time.monotonic() < deadline:
             if self._process.poll() is not None:
                 raise RuntimeError(f"server exited with {self._process.returncode}: {self.log_path.read_text()}")
             try:
-                if httpx.get(self.url + "/api/health", timeout=1.0).status_code == 200:
-                    return self
+                with self.http() as client:
+                    if client.get("/api/health", timeout=1.0).status_code == 200:
+                        return self
             except httpx.HTTPError:
                 pass
             time.sleep(0.2)
@@ -87,8 +109,14 @@ class ServerProcess:
             self._process.kill()
             self._process.wait()
 
+    def http(self) -> httpx.Client:
+        """A client of this server (trusting its own certificate authority when it serves HTTPS)."""
+        return httpx.Client(base_url=self.url, verify=str(self.ca) if self.tls and self.ca.exists() else True)
+
     def get(self, path: str) -> dict:
-        return httpx.get(self.url + path, timeout=5.0).json()
+        with self.http() as client:
+            return client.get(path, timeout=5.0).json()
 
     def post(self, path: str, json: dict | None = None) -> httpx.Response:
-        return httpx.post(self.url + path, json=json, timeout=5.0)
+        with self.http() as client:
+            return client.post(path, json=json, timeout=5.0)

@@ -26,6 +26,7 @@ from robot.events import EventBus, Subscription
 from robot.hardware.bus import BusError, DynamixelBus
 from robot.hardware.config import HardwareConfig
 from robot.hardware.xm430 import STALL_CURRENT_A, ServoReadings
+from robot.in_process import InProcessPort
 from robot.interface import (
     CommandReply,
     DiagnosticArray,
@@ -55,7 +56,7 @@ CONTROLLED_STOP_SPEED_RAD_S = 0.6
 NOT_ON_HARDWARE = "needs the IMU, cameras and foot sensors, which are not on the servo bus: simulation only for now"
 
 
-class HardwareWorker:
+class HardwareWorker(InProcessPort):
     def __init__(
         self,
         config: HardwareConfig,
@@ -239,6 +240,10 @@ class HardwareWorker:
 
     def state(self) -> RobotState:
         return self._board.latest()
+
+    def announce(self, kind: str, message: str, level: Level = Level.OK, **data: Any) -> Event:
+        """An event from the server about the robot (e.g. a refused 3D-view click), said like the robot's own."""
+        return self._bus.publish(kind, message, level, **data)
 
     def subscribe(self) -> Subscription:
         return self._events.subscribe()

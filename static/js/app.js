@@ -16,24 +16,25 @@ async function loadConfig() {
   const software = softwareWebGL();
   // Browsers without a GPU get the light view: the full one keeps a CPU renderer busy ~200 ms a frame.
   const profile = software ? "light" : "full";
-  const port = humanoid.config.viser_ports[profile];
   const frame = $("scene");
+  const scene = await sceneAccess();
+  const port = scene && scene.ports[profile];
   if (!port) {
     $("scene-note").textContent = "The 3D mirror is disabled on this server.";
     frame.hidden = true;
     return;
   }
-  const { host, crossSite } = sceneHost();
-  const url = `${location.protocol}//${host}:${port}/`;
+  const url = scene.url(port);
+  const fullUrl = scene.url(scene.ports.full);
   frame.src = software ? `${url}?fixedDpr=${humanoid.config.mirror_software_dpr}` : url;
-  $("scene-note").innerHTML = crossSite
-    ? `3D mirror from <a href="${url}" target="_blank" rel="noopener">${url}</a> (separate site: it cannot slow the e-stop)` +
+  $("scene-note").innerHTML = scene.crossSite
+    ? `3D mirror from <a href="${url}" target="_blank" rel="noopener">another site of this server</a> (it cannot slow the e-stop)` +
       (software
         ? `; software WebGL detected: light view at ${humanoid.config.mirror_software_dpr}x resolution ` +
-          `(<a href="${location.protocol}//${host}:${humanoid.config.viser_ports.full}/" target="_blank" rel="noopener">full view</a>).`
+          `(<a href="${fullUrl}" target="_blank" rel="noopener">full view</a>).`
         : ".")
-    : `Open this page through 127.0.0.1 or localhost to keep the 3D view off the e-stop path, or use the ` +
-      `<a href="${url}" target="_blank" rel="noopener">3D view in its own tab</a>.`;
+    : `This browser cannot reach the server by a second name, so the 3D view shares this page's process and may ` +
+      `slow the e-stop: open the <a href="${url}" target="_blank" rel="noopener">3D view in its own tab</a>.`;
 }
 
 // ---- WebSocket -----------------------------------------------------------------------------------------------

@@ -56,7 +56,7 @@
     const key = alarms.map((a) => `${a.level}|${a.name}|${a.message}`).join("\n");
     if (key === bannerKey) return; // unchanged: no DOM work (a software-rendered page repaints what it touches)
     bannerKey = key;
-    if (!alarms.length) { banner.hidden = true; return; }
+    if (!alarms.length) { banner.hidden = true; banner.replaceChildren(); return; } // a hidden banner keeps no old alarm
     banner.hidden = false;
     banner.classList.toggle("banner-error", alarms.some((a) => a.level === 2));
     const stop = alarms.some((a) => a.stops_motion && a.level === 2) ? " The robot is stopped until this is fixed." : "";

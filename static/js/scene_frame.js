@@ -1,15 +1,34 @@
-// The 3D views (live mirror, session replay) are viser pages on their own ports, shown in iframes. Shared by the
-// mission-control and sessions pages.
+// The 3D views (live mirror, session replay) are viser pages behind the server's gates, on their own ports, shown
+// in iframes. Shared by the mission-control and sessions pages.
 "use strict";
 
 // Software WebGL in the same page (or a same-site iframe) blocks this page's main thread for tens of ms per
-// frame and would delay the e-stop. 127.0.0.1 and localhost are different sites, so the iframe gets its own
-// renderer process when we swap one for the other.
-function sceneHost() {
-  const host = location.hostname;
-  if (host === "127.0.0.1") return { host: "localhost", crossSite: true };
-  if (host === "localhost") return { host: "127.0.0.1", crossSite: true };
-  return { host, crossSite: false };
+// frame and would delay the e-stop. Browsers isolate by site (host name), not port, so the views are opened on
+// another name of this server (the server says which: localhost for 127.0.0.1, its address for its name, ...);
+// if this browser cannot reach that name, on this page's own.
+// Returns {url(port), crossSite} where url gives the view's address with this login's token.
+async function sceneAccess() {
+  const response = await fetch("/api/scene");
+  if (!response.ok) return null;
+  const scene = await response.json();
+  const address = (host, port) => `${location.protocol}//${host}:${port}/s/${scene.token}/`;
+  const anyPort = scene.ports.full || scene.ports.light || scene.ports.replay;
+  let host = scene.host;
+  if (anyPort && host !== location.hostname && !(await reachable(address(host, anyPort)))) host = location.hostname;
+  return { ports: scene.ports, crossSite: host !== location.hostname, url: (port) => address(host, port) };
+}
+
+async function reachable(url) {
+  const controller = new AbortController();
+  const timer = setTimeout(() => controller.abort(), 3000);
+  try {
+    await fetch(url, { mode: "no-cors", cache: "no-store", signal: controller.signal });
+    return true;
+  } catch (e) {
+    return false;
+  } finally {
+    clearTimeout(timer);
+  }
 }
 
 // Where WebGL runs in software (no GPU: SwiftShader, llvmpipe), each 3D frame costs hundreds of ms of CPU;
@@ -27,4 +46,3 @@ function softwareWebGL() {
     return true;
   }
 }
-

@@ -182,7 +182,8 @@ function renderEvents(s) {
 async function startReplay(s) {
   const config = await (await fetch("/api/config")).json();
   const note = $("replay-note");
-  if (!config.replay_port) {
+  const scene = config.replay_port ? await sceneAccess() : null;
+  if (!scene || !scene.ports.replay) {
     note.textContent = "The 3D replay is disabled on this server (no 3D views).";
     $("replay-frame").hidden = true;
     return;
@@ -191,12 +192,12 @@ async function startReplay(s) {
     note.textContent = "This session recorded no motion to replay.";
     return;
   }
-  // as the live mirror: on the other loopback name the 3D view is another site, so its software WebGL cannot hold
-  // up this page; without a GPU it renders at reduced resolution
-  const url = `${location.protocol}//${sceneHost().host}:${config.replay_port}/`;
+  // as the live mirror: on another name of this server the 3D view is another site, so its software WebGL cannot
+  // hold up this page; without a GPU it renders at reduced resolution
+  const url = scene.url(scene.ports.replay);
   const frame = $("replay-frame");
   if (!frame.src) frame.src = softwareWebGL() ? `${url}?fixedDpr=${config.mirror_software_dpr}` : url;
-  note.innerHTML = `3D replay from <a href="${url}" target="_blank" rel="noopener">${url}</a>: its panel has the plots (joint target vs position, centre of mass, battery, control tick).`;
+  note.innerHTML = `3D replay (<a href="${url}" target="_blank" rel="noopener">in its own tab</a>): its panel has the plots (joint target vs position, centre of mass, battery, control tick).`;
   const r = await fetch("/api/replay", { method: "POST", headers: { "Content-Type": "application/json" },
                                          body: JSON.stringify({ session_id: s.id }) });
   if (!r.ok) { note.textContent = `replay: ${await errorText(r)}`; return; }

@@ -6,7 +6,6 @@ import dataclasses
 
 import numpy as np
 
-from app.bench.server import free_port
 from app.mirror import VISIBLE_CHANGE, SceneMirror
 from robot.interface import KnownObject, OccupancyMap, PerceptionState, ScanView, SensorFeed
 
@@ -32,7 +31,7 @@ class MovablePort:
 
 def test_mirror_pushes_visible_motion_only(make_worker) -> None:
     port = MovablePort(make_worker(realtime=False))
-    mirror = SceneMirror(port, "127.0.0.1", free_port())
+    mirror = SceneMirror(port)
     try:
         assert mirror.update_once()  # first picture
         port.offset[0] += VISIBLE_CHANGE / 10
@@ -80,7 +79,7 @@ def test_mirror_draws_the_planned_footsteps_com_and_zmp_and_clears_them(make_wor
         com=(0.02, 0.0, 0.23), zmp=(0.03, 0.01), support="left",
     )  # fmt: skip
     port.snapshot = dataclasses.replace(port.snapshot, locomotion=walking)
-    mirror = SceneMirror(port, "127.0.0.1", free_port())
+    mirror = SceneMirror(port)
     try:
         assert mirror.update_once()
         steps = [h for h in mirror.gait._steps if h.visible]
@@ -99,7 +98,7 @@ def test_mirror_draws_the_planned_footsteps_com_and_zmp_and_clears_them(make_wor
 
 def test_mirror_draws_scan_map_and_seen_objects_and_only_resends_changes(make_worker) -> None:
     port = MovablePort(make_worker(realtime=False))
-    mirror = SceneMirror(port, "127.0.0.1", free_port())
+    mirror = SceneMirror(port)
     try:
         mirror.update_once()
         ranges = tuple([1.0] * 64)

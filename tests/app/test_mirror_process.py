@@ -1,56 +1,25 @@
 """The 3D mirrors in their own process draw the robot from the robot process's own messages, at a lower CPU
-priority than the web server, go on drawing after the robot process is restarted, and send a shift-clicked goal
-back to the robot."""
+priority than the web server, behind gates that admit only a login's token, go on drawing after the robot process
+is restarted, and hand a shift-click back with who made it."""
 
 from __future__ import annotations
 
 import asyncio
 import time
 
-import msgspec
+import httpx
 import psutil
-import viser
+import pytest
 import websockets
-from viser._messages import ScenePointerMessage, ViewerCameraMessage
 
+from app.auth.roles import Principal, Role
+from app.auth.scene_tokens import SceneGrant, SceneTokens
 from app.bench.server import free_port
 from app.mirror_process import MIRROR_NICE, MirrorProcess
-from robot.interface import Mode, StopTeleop, Teleop
+from robot.interface import StopTeleop, Teleop
 from robot.process import WorkerProcess
 from tests.app.test_api import wait_until
-
-
-async def scene_bytes(port: int, seconds: float) -> int:
-    """What a viewer's browser is sent in its first `seconds` (the scene, then its updates)."""
-    received = 0
-    async with websockets.connect(f"ws://127.0.0.1:{port}", max_size=None,
-                                  subprotocols=[f"viser-v{viser.__version__}"]) as viewer:  # fmt: skip
-        deadline = time.monotonic() + seconds
-        while (left := deadline - time.monotonic()) > 0:
-            try:
-                received += len(await asyncio.wait_for(viewer.recv(), timeout=left))
-            except TimeoutError:
-                break
-    return received
-
-
-async def shift_click(port: int, origin: tuple[float, float, float], direction: tuple[float, float, float]) -> None:
-    """What a viewer's browser sends for a shift+click in the 3D view (viser's own message), then stays a moment
-    (a click from a viewer that has gone is dropped)."""
-    camera = ViewerCameraMessage((1.0, 0.0, 0.0, 0.0), origin, 1.0, 0.01, 100.0, 480, 640, (0.0, 0.0, 0.0),
-                                 (0.0, 0.0, 1.0))  # fmt: skip
-    click = ScenePointerMessage("click", origin, direction, ((0.5, 0.5),), "shift")
-    async with websockets.connect(f"ws://127.0.0.1:{port}", max_size=None,
-                                  subprotocols=[f"viser-v{viser.__version__}"]) as viewer:  # fmt: skip
-        # viser counts a viewer as connected (and takes its clicks) from its first camera message
-        for message in (camera, click):
-            await viewer.send(msgspec.msgpack.encode(message.as_serializable_dict()))
-        deadline = time.monotonic() + 1.0
-        while (left := deadline - time.monotonic()) > 0:
-            try:
-                await asyncio.wait_for(viewer.recv(), timeout=left)
-            except TimeoutError:
-                break
+from tests.support.scene_viewer import scene_bytes, shift_click, view_url
 
 
 def drive(worker: WorkerProcess, seconds: float) -> None:
@@ -61,29 +30,42 @@ def drive(worker: WorkerProcess, seconds: float) -> None:
     worker.submit(StopTeleop())
 
 
-def test_the_mirrors_draw_the_robot_process_state_go_on_after_it_is_restarted_and_send_clicked_goals() -> None:
+def test_the_mirrors_draw_the_robot_behind_their_gates_go_on_after_a_restart_and_hand_clicks_back() -> None:
     worker = WorkerProcess(seed=0, perception=False)
     worker.start()
-    mirrors = MirrorProcess(worker, "127.0.0.1", {"full": free_port(), "light": free_port()}, 30.0, shadows=False)
+    tokens = SceneTokens()
+    clicks: list[tuple[SceneGrant, tuple, tuple]] = []
+    ports = {"full": free_port(), "light": free_port()}
+    mirrors = MirrorProcess(worker, "127.0.0.1", ports, 30.0, False, tokens, lambda *click: clicks.append(click))
     mirrors.start()
     try:
         assert psutil.Process(mirrors._process.pid).nice() == MIRROR_NICE  # viewers wait, the e-stop does not
-        assert asyncio.run(scene_bytes(mirrors.mirrors["light"].port, 3.0)) > 50_000  # the apartment and robot
+        assert {name: m.port for name, m in mirrors.mirrors.items()} == ports  # the gates listen where asked
+        ada = tokens.issue(Principal("ada", Role.OPERATOR), "login-ada", time.time() + 60)
+        # nothing without a token, or with a forged or expired one
+        light = ports["light"]
+        for path in ("/", "/index.html", "/s/forged.token/", f"/s/{ada[:-2]}xx/"):
+            assert httpx.get(f"http://127.0.0.1:{light}{path}", timeout=10).status_code == 401
+        expired = tokens.issue(Principal("ada", Role.OPERATOR), "login-ada", time.time() - 1)
+        for url in (f"ws://127.0.0.1:{light}", view_url(light, expired)):
+            with pytest.raises(websockets.InvalidStatus):
+                asyncio.run(scene_bytes(url, 1.0))
+        page = httpx.get(f"http://127.0.0.1:{light}/s/{ada}/?fixedDpr=0.5", timeout=10)
+        assert page.status_code == 200 and '<div id="root">' in page.text
+        assert page.headers["referrer-policy"] == "no-referrer"  # the token stays out of other sites' logs
+        assert asyncio.run(scene_bytes(view_url(light, ada), 3.0)) > 50_000  # the apartment and robot
         before = mirrors.mirrors["light"].updates
         drive(worker, 2.0)
         wait_until(lambda: mirrors.mirrors["light"].updates > before + 10, timeout=10)
-        # a shift+click on the floor at (0.6, -0.4), from the mirrors' process back to the robot process: refused
-        # while the robot still stops its teleop walk, and the refusal is said
-        clicked = lambda: asyncio.run(shift_click(mirrors.mirrors["full"].port, (-2.4, -2.4, 3.0), (0.6, 0.4, -0.6)))  # noqa: E731
-        clicked()
-        wait_until(lambda: any(e.kind == "mirror/click_refused" for e in worker.recent_events()), timeout=10)
-        assert worker.state().plan is None
-        wait_until(lambda: worker.state().mode == Mode.IDLE, timeout=10)
-        clicked()
-        wait_until(lambda: worker.state().plan is not None, timeout=10)
-        plan = worker.state().plan
-        assert "clicked in the 3D view" in plan.command_text
-        assert [(s.action, s.args) for s in plan.steps] == [("navigate_to", {"target": "0.60, -0.40"})]
+        # a shift+click on the floor: handed back with who made it (the web server decides what it may do)
+        asyncio.run(shift_click(view_url(ports["full"], ada), (-2.4, -2.4, 3.0), (0.6, 0.4, -0.6)))
+        wait_until(lambda: clicks, timeout=10)
+        ((grant, origin, direction),) = clicks
+        assert (grant.user, grant.role) == ("ada", Role.OPERATOR)
+        assert origin == (-2.4, -2.4, 3.0) and direction == (0.6, 0.4, -0.6)
+        # a login that ends: its token is refused from then on
+        mirrors.revoke("login-ada")
+        wait_until(lambda: httpx.get(f"http://127.0.0.1:{light}/s/{ada}/", timeout=10).status_code == 401, 10)
         worker.restart()  # as the supervisor would: the mirror keeps its feed
         after_restart = mirrors.mirrors["light"].updates
         drive(worker, 2.0)

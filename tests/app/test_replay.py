@@ -7,7 +7,6 @@ import time
 import numpy as np
 import pytest
 
-from app.bench.server import free_port
 from app.replay import ReplayError, SessionReplay
 from app.sessions.queries import load_telemetry
 from tests.app.session_helpers import record_session
@@ -17,7 +16,7 @@ from tests.app.session_helpers import record_session
 def replay(store, make_worker):
     factory, audio_dir = store
     sid = record_session(factory, make_worker(realtime=False), audio_dir)
-    viewer = SessionReplay(factory, "127.0.0.1", free_port())
+    viewer = SessionReplay(factory)
     yield viewer, factory, sid
     viewer.stop()
 

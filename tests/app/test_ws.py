@@ -2,6 +2,8 @@ from __future__ import annotations
 
 import time
 
+from tests.app.test_api import wait_until
+
 
 def receive_until(ws, predicate, limit: int = 200):
     for _ in range(limit):
@@ -56,6 +58,7 @@ def test_socket_teleop_drives_and_closing_the_socket_stops_the_robot(client) -> 
             time.sleep(0.1)
         receive_until(ws, lambda m: m["type"] == "state" and m["state"]["mode"] == "teleop")
     # the browser went away while driving: stopped at once, not only by the deadman
-    stop = next(e for e in reversed(worker.recent_events()) if e.kind.startswith("teleop/"))
-    assert stop.kind == "teleop/stop" and stop.data["source"] == "browser-disconnect"
+    last_teleop = lambda: next(e for e in reversed(worker.recent_events()) if e.kind.startswith("teleop/"))  # noqa: E731
+    stop = wait_until(lambda: last_teleop().kind == "teleop/stop" and last_teleop(), timeout=5)
+    assert stop.data["source"] == "browser-disconnect"
     assert worker.wait_for(lambda s: s.mode.value == "idle", 5.0)

@@ -1,15 +1,18 @@
 """Logging in from Chromium: the login page, an operator taking control, a viewer's page that can only watch
-and stop, and both pages showing who has control as it changes."""
+and stop (its 3D view's clicks refused), both pages showing who has control as it changes, and the 3D views
+closed to anyone without a login."""
 
 from __future__ import annotations
 
+import httpx
 import pytest
 
 from app.auth.roles import Role
 from app.auth.store import UserStore
-from app.bench.browser import launch_chromium
+from app.bench.browser import launch_chromium, wait_for_scene_render
 from app.bench.server import ServerProcess
 from app.sessions.db import make_engine, make_session_factory, upgrade_to_head
+from tests.support.scene_viewer import run_apart, shift_click, view_url
 
 pytestmark = pytest.mark.slow
 
@@ -42,6 +45,12 @@ def test_login_roles_and_control_from_the_page(tmp_path) -> None:
         expect(ada.locator("#access-holder")).to_have_text("control: free")
         ada.click("#access-take")
         expect(ada.locator("#access-holder")).to_have_text("control: ada")
+        # the 3D views: nothing without a login on any of their ports; the logged-in page's frame renders
+        for port in (server.viser_port, server.viser_light_port, server.replay_port):
+            assert httpx.get(f"http://127.0.0.1:{port}/", timeout=10).status_code == 401
+        assert wait_for_scene_render(ada) > 8.0
+        frame_src = ada.locator("#scene").get_attribute("src")
+        assert "/s/" in frame_src and frame_src.startswith("http://localhost:")
 
         vic = browser.new_context().new_page()  # another person, another browser profile
         vic.goto(server.url + "/login")
@@ -56,8 +65,13 @@ def test_login_roles_and_control_from_the_page(tmp_path) -> None:
         expect(vic.locator("#mode")).to_have_text("mode: estop", timeout=5_000)
         expect(ada.locator("#mode")).to_have_text("mode: estop", timeout=5_000)
 
+        vic_views = vic.evaluate("fetch('/api/scene').then((r) => r.json())")
+        run_apart(shift_click(view_url(server.viser_port, vic_views["token"]), (-2.4, -2.4, 3.0), (0.6, 0.4, -0.6)))
+        expect(vic.locator("#events")).to_contain_text("3D view click by vic refused", timeout=10_000)
+
         ada.click("#access-release")
         expect(vic.locator("#access-holder")).to_have_text("control: free", timeout=10_000)
         ada.click("#access-logout")
         expect(ada).to_have_url(server.url + "/login")
+        assert httpx.get(frame_src.replace("localhost", "127.0.0.1"), timeout=10).status_code == 401  # logged out
         browser.close()

@@ -49,7 +49,7 @@ def test_the_voice_panel_says_the_robot_has_no_microphone_or_speaker_here(page) 
 def test_the_3d_mirror_renders_in_a_cross_site_frame(page, server) -> None:
     # Page on 127.0.0.1, scene on localhost: another site. Headless Chromium renders WebGL in software, so the
     # page picks the light view at half resolution (its script sets the frame's source after probing WebGL: wait).
-    expected = f"http://localhost:{server.viser_light_port}/?fixedDpr=0.5"
+    expected = re.compile(rf"http://localhost:{server.viser_light_port}/s/[\w.-]+/\?fixedDpr=0\.5")
     playwright_api.expect(page.locator("#scene")).to_have_attribute("src", expected)
     assert wait_for_scene_render(page) > 8.0
     playwright_api.expect(page.locator("#conn")).to_have_text("connected")
@@ -210,6 +210,50 @@ def test_diagnostics_plot_live_and_an_overheating_servo_alarms_and_stops_the_rob
     expect(banner).not_to_contain_text("l_knee", timeout=5_000)
     page.click("#release")
     expect(page.locator("#mode")).to_have_text("mode: idle", timeout=5_000)
+
+
+SEEN_WHOLE = """(selector) => Array.from(document.querySelectorAll(selector)).map((el) => {
+  const r = el.getBoundingClientRect();
+  const top = document.elementFromPoint(r.left + r.width / 2, r.top + r.height / 2);
+  return r.width > 0 && r.top >= 0 && r.left >= 0 && r.bottom <= innerHeight && r.right <= innerWidth
+    && !!top && (top === el || el.contains(top));
+})"""
+
+
+def test_on_a_laptop_screen_the_estop_the_command_box_and_the_running_plan_show_together_with_alarms_up(
+    server, playwright
+) -> None:
+    """1280 x 720, two alarms up, a plan running: the e-stop, the command box with its Send button and every step
+    of the plan are on the screen at once, none under the alarm banner; no identity controls with access off."""
+    expect = playwright_api.expect
+    browser = launch_chromium(playwright)
+    try:
+        page = browser.new_page(viewport={"width": 1280, "height": 720})
+        page.goto(server.url)
+        expect(page.locator("#conn")).to_have_text("connected", timeout=20_000)
+        servos = server.get("/api/diagnostics")["groups"]["servos"]["statuses"]
+        knee = next(s for s in servos if s["name"] == "servos/l_knee")
+        warm = 70.0 - knee["values"]["temperature_c"]  # WARN (65-75 C): an alarm that does not stop the robot
+        assert server.post(
+            "/api/sim/faults", json={"fault": "servo_heat", "target": "l_knee", "value": warm}
+        ).is_success
+        assert server.post("/api/sim/faults", json={"fault": "battery_soc", "value": 0.15}).is_success
+        expect(page.locator("#alarm-banner")).to_contain_text("servos/l_knee", timeout=10_000)
+        expect(page.locator("#alarm-banner")).to_contain_text("battery", timeout=10_000)
+        page.fill("#command-text", "pick up the red mug from the kitchen counter")
+        page.click("#send")
+        expect(page.locator("#plan-steps li")).to_have_count(4)
+        expect(page.locator("#plan-steps li").first).to_have_attribute("data-state", "running", timeout=15_000)
+        for selector in ("#estop", "#command-text", "#send", "#plan-steps li", "#plan-state"):
+            assert all(page.evaluate(SEEN_WHOLE, selector)), f"{selector} is off the screen or covered"
+        expect(page.locator("#access-logout")).to_be_hidden()  # access control is off: nobody to log out
+        expect(page.locator("#access-user")).to_be_hidden()
+        page.click("#cancel")
+        expect(page.locator("#plan-state")).to_have_text("cancelled", timeout=15_000)
+    finally:
+        server.post("/api/sim/faults", json={"fault": "battery_soc", "value": 1.0})
+        server.post("/api/sim/faults", json={"fault": "clear"})
+        browser.close()
 
 
 def test_sessions_page_shows_the_timeline_and_replays_from_an_entry(page, server) -> None:
