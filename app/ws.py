@@ -1,4 +1,5 @@
-"""WebSocket `/ws`: state and events out, e-stop in (the fastest path from a browser press to the robot).
+"""WebSocket `/ws`: state and events out, e-stop in (the fastest path from a browser press to the robot), and
+`/ws/stop`: the e-stop's second path (see `stop_socket`).
 
 Messages from the server: {"type": "hello", ...}, {"type": "state", "state": ...}, {"type": "event", "event": ...},
 {"type": "diagnostics", "diagnostics": ...} (once a second, as GET /api/diagnostics),
@@ -37,6 +38,7 @@ from robot.interface import Command, EStop, OperatorHeartbeat, ReleaseEStop, Sto
 
 router = APIRouter()
 MAX_MESSAGE_BYTES = 4096
+BACKUP_SOURCE = "browser-backup"  # an e-stop that came in on the page's second socket first
 _ANSWERS: set[asyncio.Task] = set()  # replies on their way to pages (kept referenced until they are sent)
 
 
@@ -187,3 +189,27 @@ async def robot_socket(ws: WebSocket) -> None:
             task.cancel()
         if drove[0]:
             tell(rt.worker, StopTeleop(source="browser-disconnect"))
+
+
+@router.websocket("/ws/stop")
+async def stop_socket(ws: WebSocket) -> None:
+    """A second way in for the e-stop, on a TCP connection of its own: the page sends every press on `/ws` and
+    here. A segment lost on one connection waits ~200 ms for its resend (a second over a bad link); both lost
+    together is the square of that chance. Takes {"type": "estop", "client_time_s": ...} and pings only."""
+    rt: Runtime = ws.app.state.runtime
+    await ws.accept()
+    with contextlib.suppress(WebSocketDisconnect):
+        while True:
+            raw = await ws.receive_text()
+            try:
+                message = json.loads(raw) if len(raw) <= MAX_MESSAGE_BYTES else {}
+                kind = message["type"]
+            except (ValueError, KeyError, TypeError):
+                kind = None
+            if kind == "estop":
+                command = EStop(source=BACKUP_SOURCE, client_time_s=_client_time(message), relayed_at_s=time.time())
+                _answer_later(ws, rt, command, "estop_ack", server_time=True)
+            elif kind == "ping":
+                await ws.send_json({"type": "pong", "t": message.get("t"), "server_time_s": time.time()})
+            else:
+                await ws.send_json({"type": "error", "message": "this socket takes e-stops and pings only"})

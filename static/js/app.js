@@ -39,8 +39,11 @@ async function loadConfig() {
 
 // ---- WebSocket -----------------------------------------------------------------------------------------------
 const HEARTBEAT_MS = 250;
+const PING_MS = 2000;
+const POOR_RTT_MS = 150; // beyond this round trip, the e-stop and teleop feel late: said in the badge
+const wsUrl = (path) => `${location.protocol === "https:" ? "wss" : "ws"}://${location.host}${path}`;
 function connect() {
-  const ws = new WebSocket(`${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/ws`);
+  const ws = new WebSocket(wsUrl("/ws"));
   humanoid.ws = ws;
   ws.onopen = () => {
     setConn("connected", "badge-ok");
@@ -48,9 +51,19 @@ function connect() {
     const beat = () => ws.readyState === WebSocket.OPEN && ws.send('{"type":"heartbeat"}');
     beat();
     ws.heartbeat = setInterval(beat, HEARTBEAT_MS);
+    // The link's round trip, shown with the connection (a pong overdue counts as that slow).
+    const ping = () => {
+      if (ws.readyState !== WebSocket.OPEN) return;
+      if (ws.pingSent !== undefined) linkQuality(performance.now() - ws.pingSent);
+      ws.pingSent = performance.now();
+      ws.send(JSON.stringify({ type: "ping", t: ws.pingSent }));
+    };
+    ping();
+    ws.pinger = setInterval(ping, PING_MS);
   };
   ws.onclose = () => {
     clearInterval(ws.heartbeat);
+    clearInterval(ws.pinger);
     setConn("disconnected: retrying", "badge-err");
     setTimeout(connect, 1000);
   };
@@ -68,7 +81,23 @@ function connect() {
     else if (m.type === "teleop_ack" && humanoid.onTeleopAck) humanoid.onTeleopAck(m);
     else if (m.type === "diagnostics" && humanoid.onDiagnostics) humanoid.onDiagnostics(m.diagnostics);
     else if (m.type === "control" && humanoid.onControl) humanoid.onControl(m.control);
+    else if (m.type === "pong" && m.t === ws.pingSent) { linkQuality(performance.now() - m.t); ws.pingSent = undefined; }
   };
+}
+
+// The e-stop's second path: a socket of its own (its own TCP connection), so that a segment lost on one
+// connection, which waits ~200 ms for its resend, does not hold up the stop.
+function connectStop() {
+  const ws = new WebSocket(wsUrl("/ws/stop"));
+  humanoid.stopWs = ws;
+  ws.onclose = () => setTimeout(connectStop, 1000);
+}
+
+function linkQuality(rttMs) {
+  humanoid.rttMs = rttMs;
+  const poor = rttMs > POOR_RTT_MS;
+  setConn(`connected · ${Math.round(rttMs)} ms` + (poor ? ": slow link, the e-stop and teleop lag" : ""),
+          poor ? "badge-warn" : "badge-ok");
 }
 
 function setConn(text, cls) { const el = $("conn"); el.textContent = text; el.className = "badge " + cls; }
@@ -77,10 +106,12 @@ function setConn(text, cls) { const el = $("conn"); el.textContent = text; el.cl
 function pressEStop(ev) {
   // The event's own timestamp: latency is measured from the moment the browser saw the press.
   const clientTime = (performance.timeOrigin + (ev && ev.timeStamp ? ev.timeStamp : performance.now())) / 1000;
-  const ws = humanoid.ws;
-  if (ws && ws.readyState === WebSocket.OPEN) {
-    ws.send(JSON.stringify({ type: "estop", client_time_s: clientTime }));
-  } else {
+  const message = JSON.stringify({ type: "estop", client_time_s: clientTime });
+  let sent = 0;
+  for (const ws of [humanoid.ws, humanoid.stopWs]) {
+    if (ws && ws.readyState === WebSocket.OPEN) { ws.send(message); sent += 1; }
+  }
+  if (sent < 2) { // a socket is down: HTTP as well
     fetch("/api/estop", { method: "POST", headers: { "Content-Type": "application/json" },
       body: JSON.stringify({ source: "browser", client_time_s: clientTime }) });
   }
@@ -268,3 +299,4 @@ function addEvent(e) {
 
 loadConfig();
 connect();
+connectStop();

@@ -105,8 +105,9 @@ def test_nobody_gets_in_without_logging_in(secured) -> None:
     page = client.get("/", follow_redirects=False)
     assert page.status_code in (302, 307) and page.headers["location"] == "/login"
     assert client.get("/login").status_code == 200
-    with pytest.raises(WebSocketDisconnect), client.websocket_connect("/ws") as ws:
-        ws.receive_json()
+    for path in ("/ws", "/ws/stop", "/ws/camera"):
+        with pytest.raises(WebSocketDisconnect), client.websocket_connect(path) as ws:
+            ws.receive_json()
 
 
 def test_login_sets_a_cookie_and_wrong_passwords_are_throttled(secured) -> None:

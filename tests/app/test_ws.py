@@ -2,6 +2,8 @@ from __future__ import annotations
 
 import time
 
+import pytest
+
 from tests.app.test_api import wait_until
 
 
@@ -62,3 +64,21 @@ def test_socket_teleop_drives_and_closing_the_socket_stops_the_robot(client) -> 
     stop = wait_until(lambda: last_teleop().kind == "teleop/stop" and last_teleop(), timeout=5)
     assert stop.data["source"] == "browser-disconnect"
     assert worker.wait_for(lambda s: s.mode.value == "idle", 5.0)
+
+
+def test_the_estop_has_a_second_socket_of_its_own(client) -> None:
+    """The page sends each press on both sockets: whichever arrives first latches, the other changes nothing."""
+    worker = client.runtime.worker
+    with client.websocket_connect("/ws") as ws, client.websocket_connect("/ws/stop") as backup:
+        ws.receive_json()
+        backup.send_json({"type": "teleop", "vx": 0.1})
+        assert "e-stops and pings only" in backup.receive_json()["message"]  # it cannot drive
+        backup.send_json({"type": "ping", "t": 7})
+        assert backup.receive_json() == {"type": "pong", "t": 7, "server_time_s": pytest.approx(time.time(), abs=60)}
+        pressed = time.time()
+        backup.send_json({"type": "estop", "client_time_s": pressed})
+        ws.send_json({"type": "estop", "client_time_s": pressed})
+        assert backup.receive_json()["accepted"] and receive_until(ws, lambda m: m["type"] == "estop_ack")["accepted"]
+        receive_until(ws, lambda m: m["type"] == "state" and m["state"]["estop_latched"])
+        latched = [e for e in worker.recent_events() if e.kind == "estop/latched"]
+        assert len(latched) == 1 and latched[0].data["source"] in ("browser", "browser-backup")
