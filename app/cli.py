@@ -1,4 +1,4 @@
-"""The `humanoid` command: serve, run, transcribe, plan, estop, sessions, hardware, db upgrade, bench."""
+"""The `humanoid` command: serve, run, transcribe, plan, estop, describe, sessions, hardware, db upgrade, bench."""
 
 from __future__ import annotations
 
@@ -202,6 +202,27 @@ def _db(args: argparse.Namespace, settings: Settings) -> int:
     return 0
 
 
+def _describe(args: argparse.Namespace, settings: Settings) -> int:
+    """The robot's description: its URDF (--urdf), or a summary of its joints."""
+    from pathlib import Path
+
+    from robot.model import humanoid_v1
+    from robot.model.urdf import robot_urdf
+
+    if args.urdf:
+        text = robot_urdf()
+    else:
+        lines = [f"{humanoid_v1.MODEL_NAME}: {len(humanoid_v1.JOINT_NAMES)} servo joints (rad; the grippers in m)"]
+        lines += [f"  {n:<12} {lim.lower:+.3f} .. {lim.upper:+.3f}" for n, lim in humanoid_v1.joint_limits().items()]
+        text = "\n".join(lines) + "\n"
+    if args.output:
+        Path(args.output).write_text(text)
+        print(f"wrote {args.output} ({len(text.encode()) / 1e3:.0f} kB)", file=sys.stderr)
+    else:
+        sys.stdout.write(text)
+    return 0
+
+
 def _bench(args: argparse.Namespace, settings: Settings) -> int:
     from app.bench import run_suite
 
@@ -260,6 +281,11 @@ def build_parser() -> argparse.ArgumentParser:
     estop.add_argument("--release", action="store_true")
     estop.add_argument("--url", default=None, help="server URL (default http://HOST:PORT)")
     estop.set_defaults(func=_estop)
+
+    describe = sub.add_parser("describe", help="the robot's description: its joints, or its URDF (--urdf)")
+    describe.add_argument("--urdf", action="store_true", help="the URDF generated from the simulator's model")
+    describe.add_argument("-o", "--output", default=None, help="write to this file (default: standard output)")
+    describe.set_defaults(func=_describe)
 
     add_sessions_parser(sub)
     add_hardware_parser(sub)
