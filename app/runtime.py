@@ -35,10 +35,19 @@ def _maintain(db: sessionmaker, settings: Settings, live_session_id: int) -> Non
 
 
 def _open_recorder(db: sessionmaker, worker: RobotPort, settings: Settings) -> SessionRecorder:
-    recorder = SessionRecorder(db, worker, kind="serve", seed=settings.seed, backend=settings.backend,
-                               audio_dir=settings.audio_dir, camera_hz=settings.record_camera_hz,
-                               camera_width=settings.record_camera_width,
-                               maintenance=lambda: _maintain(db, settings, recorder.session_id))  # fmt: skip
+    recorder = SessionRecorder(
+        db,
+        worker,
+        kind="serve",
+        seed=settings.seed,
+        backend=settings.backend,
+        audio_dir=settings.audio_dir,
+        camera_hz=settings.record_camera_hz,
+        camera_width=settings.record_camera_width,
+        scan_hz=settings.record_scan_hz,
+        map_period_s=settings.record_map_period_s,
+        maintenance=lambda: _maintain(db, settings, recorder.session_id),
+    )
     return recorder
 
 
