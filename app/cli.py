@@ -26,6 +26,8 @@ def _serve(args: argparse.Namespace, settings: Settings) -> int:
     settings = settings.model_copy(update={k: v for k, v in overrides.items() if v is not None})
     if args.viser_port is not None:
         settings = settings.model_copy(update={"viser_port": args.viser_port})
+    if args.foxglove_port is not None:
+        settings = settings.model_copy(update={"foxglove_port": args.foxglove_port})
     upgrade_to_head(settings.database_url)
     try:  # said here plainly, before anything starts (Runtime.start checks again)
         _access_control(settings).check_exposure()
@@ -40,6 +42,8 @@ def _serve(args: argparse.Namespace, settings: Settings) -> int:
         f"  3D views on ports {settings.viser_port} (full) and {settings.viser_light_port} (light); "
         f"session replay on {settings.replay_port}"
     )
+    if settings.foxglove_port is not None:
+        print(f"  Foxglove: ws://127.0.0.1:{settings.foxglove_port}, and ws://{settings.host}:{settings.port}/foxglove")
     # No per-message compression: deflating each page's copy of each state cost ~12 % of this process's interpreter
     # lock with 20 pages (`humanoid bench load`); the e-stop waits behind whatever holds that lock.
     uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_level="warning", ws_max_size=65536,
@@ -247,6 +251,13 @@ def build_parser() -> argparse.ArgumentParser:
         type=int,
         default=None,
         help="port of the full 3D view (default 8081); the light one is HUMANOID_VISER_LIGHT_PORT (8082)",
+    )
+    serve.add_argument(
+        "--foxglove-port",
+        type=int,
+        default=None,
+        help="start the live Foxglove WebSocket server on this loopback port (off by default); "
+        "other computers connect through ws://HOST:PORT/foxglove?token=API_TOKEN",
     )
     serve.add_argument("--seed", type=int, default=None, help="world seed (object placement, obstacles)")
     serve.add_argument("--no-mirror", action="store_true", help="do not start the 3D mirror")

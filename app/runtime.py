@@ -11,6 +11,7 @@ from sqlalchemy.orm import sessionmaker
 from app.auth.access import AccessControl
 from app.auth.control import ControlLock
 from app.auth.store import UserStore
+from app.foxglove.live import LiveFoxglove
 from app.mirror import FULL, LIGHT, PROFILES, SceneMirror
 from app.mirror_process import MirrorProcess, RemoteMirror
 from app.replay import SessionReplay
@@ -65,6 +66,7 @@ class Runtime:
     control: ControlLock = field(default_factory=ControlLock)  # the one operator in control
     supervisor: WorkerSupervisor | None = None  # restarts a robot process that died
     mirror_process: MirrorProcess | None = None  # the 3D mirrors, when they run in their own process
+    foxglove: LiveFoxglove | None = None  # the live Foxglove server (humanoid serve --foxglove-port N)
 
     @staticmethod
     def start(settings: Settings, worker: RobotPort | None = None) -> Runtime:
@@ -128,8 +130,19 @@ class Runtime:
                                             profile=PROFILES[name], shadows=settings.mirror_shadows)  # fmt: skip
                 mirrors[name].start()
         replay = SessionReplay(db, settings.viser_host, settings.replay_port) if settings.enable_mirror else None
-        rt = Runtime(settings, worker, engine, db, recorder, mirrors, replay, access=access,
-                     mirror_process=mirror_process)  # fmt: skip
+        foxglove = LiveFoxglove(worker, settings.foxglove_port).start() if settings.foxglove_port is not None else None
+        rt = Runtime(
+            settings,
+            worker,
+            engine,
+            db,
+            recorder,
+            mirrors,
+            replay,
+            access=access,
+            mirror_process=mirror_process,
+            foxglove=foxglove,
+        )
         if settings.supervise_worker and isinstance(worker, WorkerProcess):
             rt.supervisor = WorkerSupervisor(worker, on_death=rt._session_crashed, on_restart=rt._new_session)
             rt.supervisor.start()
@@ -152,6 +165,8 @@ class Runtime:
             self.mirror_process.stop()
         if self.replay is not None:
             self.replay.stop()
+        if self.foxglove is not None:
+            self.foxglove.stop()
         self.worker.stop()
         self.recorder.close()
         self.engine.dispose()
