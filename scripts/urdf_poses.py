@@ -35,11 +35,13 @@ def poses(count: int, seed: int = 7) -> list[dict]:
             return m
 
         inverse = np.linalg.inv(pose(trunk))
-        out.append({
-            "base": humanoid_v1.TRUNK_BODY,
-            "joints": {model.joint(j).name: v for j, v in values.items() if j not in mimics},
-            "links": {model.body(b).name: (inverse @ pose(b)).ravel().tolist() for b in bodies},
-        })
+        out.append(
+            {
+                "base": humanoid_v1.TRUNK_BODY,
+                "joints": {model.joint(j).name: v for j, v in values.items() if j not in mimics},
+                "links": {model.body(b).name: (inverse @ pose(b)).ravel().tolist() for b in bodies},
+            }
+        )
     return out
 
 
