@@ -164,14 +164,18 @@ class _Publisher:
             self.channels.map.log(fm.occupancy_grid(self.map, now), log_time=now)
 
     def _send_state(self, live: LiveFoxglove) -> None:
+        """/tf and the joint states, built only while some client listens (they cost the interpreter's time)."""
+        tf, joints = self.channels.tf.has_sinks(), self.channels.joints.has_sinks()
+        if not (tf or joints):
+            return
         state = self.worker.state()
         now = time.time_ns()
         qpos = np.asarray(state.qpos, dtype=float)
-        mocap = np.asarray(state.mocap_positions, dtype=float) if state.mocap_positions else None
-        self.channels.tf.log(self.frames.transforms(qpos, mocap, now), log_time=now)
-        positions = qpos[self.joint_qpos] if qpos.size > int(self.joint_qpos.max(initial=0)) else []
-        if len(positions):
-            self.channels.joints.log(fm.joint_states(self.joint_names, positions, now), log_time=now)
+        if tf:
+            mocap = np.asarray(state.mocap_positions, dtype=float) if state.mocap_positions else None
+            self.channels.tf.log(self.frames.transforms(qpos, mocap, now), log_time=now)
+        if joints and qpos.size > int(self.joint_qpos.max(initial=0)):
+            self.channels.joints.log(fm.joint_states(self.joint_names, qpos[self.joint_qpos], now), log_time=now)
             live.published += 1
 
     def _send_sensors(self) -> None:
@@ -179,14 +183,17 @@ class _Publisher:
         now = time.time_ns()
         if feed.camera is not None and feed.camera.seq != self.camera_seq:
             self.camera_seq = feed.camera.seq
-            self.channels.camera.log(fm.compressed_image(feed.camera.jpeg, now), log_time=now)
+            if self.channels.camera.has_sinks():
+                self.channels.camera.log(fm.compressed_image(feed.camera.jpeg, now), log_time=now)
         if feed.scan is not None and feed.scan.sim_time_s != self.scan_time:
             self.scan_time = feed.scan.sim_time_s
-            self.channels.scan.log(fm.laser_scan(feed.scan, now), log_time=now)
+            if self.channels.scan.has_sinks():
+                self.channels.scan.log(fm.laser_scan(feed.scan, now), log_time=now)
         map_due = time.monotonic() - self.map_sent_at > MAP_PERIOD_S
         if feed.map is not None and feed.map.scans != self.map_scans and map_due:
             self.map, self.map_scans, self.map_sent_at = feed.map, feed.map.scans, time.monotonic()
-            self.channels.map.log(fm.occupancy_grid(feed.map, now), log_time=now)
+            if self.channels.map.has_sinks():
+                self.channels.map.log(fm.occupancy_grid(feed.map, now), log_time=now)
 
     def _send_events(self, events: EventSubscription) -> None:
         while (event := events.get(timeout=0)) is not None:
