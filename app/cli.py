@@ -1,4 +1,4 @@
-"""The `humanoid` command: serve, run, transcribe, plan, estop, sessions, hardware, db upgrade, bench."""
+"""The `humanoid` command: serve, run, transcribe, plan, estop, describe, sessions, hardware, db upgrade, bench."""
 
 from __future__ import annotations
 
@@ -34,6 +34,8 @@ def _serve(args: argparse.Namespace, settings: Settings) -> int:
             print(f"humanoid serve: {exc}", file=sys.stderr)
             return 2
         settings = settings.model_copy(update={"tls_cert": tls.cert, "tls_key": tls.key})
+    if args.foxglove_port is not None:
+        settings = settings.model_copy(update={"foxglove_port": args.foxglove_port})
     upgrade_to_head(settings.database_url)
     try:  # said here plainly, before anything starts (Runtime.start checks again)
         _access_control(settings).check_exposure()
@@ -49,6 +51,8 @@ def _serve(args: argparse.Namespace, settings: Settings) -> int:
         f"  3D views on ports {settings.viser_port} (full) and {settings.viser_light_port} (light); "
         f"session replay on {settings.replay_port}"
     )
+    if settings.foxglove_port is not None:
+        print(f"  Foxglove: ws://127.0.0.1:{settings.foxglove_port}, and ws://{settings.host}:{settings.port}/foxglove")
     # No per-message compression: deflating each page's copy of each state cost ~12 % of this process's interpreter
     # lock with 20 pages (`humanoid bench load`); the e-stop waits behind whatever holds that lock.
     uvicorn.run(
@@ -240,6 +244,27 @@ def _db(args: argparse.Namespace, settings: Settings) -> int:
     return 0
 
 
+def _describe(args: argparse.Namespace, settings: Settings) -> int:
+    """The robot's description: its URDF (--urdf), or a summary of its joints."""
+    from pathlib import Path
+
+    from robot.model import humanoid_v1
+    from robot.model.urdf import robot_urdf
+
+    if args.urdf:
+        text = robot_urdf()
+    else:
+        lines = [f"{humanoid_v1.MODEL_NAME}: {len(humanoid_v1.JOINT_NAMES)} servo joints (rad; the grippers in m)"]
+        lines += [f"  {n:<12} {lim.lower:+.3f} .. {lim.upper:+.3f}" for n, lim in humanoid_v1.joint_limits().items()]
+        text = "\n".join(lines) + "\n"
+    if args.output:
+        Path(args.output).write_text(text)
+        print(f"wrote {args.output} ({len(text.encode()) / 1e3:.0f} kB)", file=sys.stderr)
+    else:
+        sys.stdout.write(text)
+    return 0
+
+
 def _bench(args: argparse.Namespace, settings: Settings) -> int:
     from app.bench import run_suite
 
@@ -264,6 +289,13 @@ def build_parser() -> argparse.ArgumentParser:
         type=int,
         default=None,
         help="port of the full 3D view (default 8081); the light one is HUMANOID_VISER_LIGHT_PORT (8082)",
+    )
+    serve.add_argument(
+        "--foxglove-port",
+        type=int,
+        default=None,
+        help="start the live Foxglove WebSocket server on this loopback port (off by default); "
+        "other computers connect through ws://HOST:PORT/foxglove?token=API_TOKEN",
     )
     serve.add_argument("--seed", type=int, default=None, help="world seed (object placement, obstacles)")
     serve.add_argument("--no-mirror", action="store_true", help="do not start the 3D mirror")
@@ -306,6 +338,11 @@ def build_parser() -> argparse.ArgumentParser:
     estop.add_argument("--release", action="store_true")
     estop.add_argument("--url", default=None, help="server URL (default http://HOST:PORT)")
     estop.set_defaults(func=_estop)
+
+    describe = sub.add_parser("describe", help="the robot's description: its joints, or its URDF (--urdf)")
+    describe.add_argument("--urdf", action="store_true", help="the URDF generated from the simulator's model")
+    describe.add_argument("-o", "--output", default=None, help="write to this file (default: standard output)")
+    describe.set_defaults(func=_describe)
 
     add_sessions_parser(sub)
     add_hardware_parser(sub)

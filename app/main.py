@@ -14,6 +14,7 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from app.api import auth, diagnostics, perception, robot, scene, sessions, speech
 from app.auth.middleware import AccessMiddleware
+from app.foxglove import proxy as foxglove_proxy
 from app.runtime import Runtime
 from app.settings import REPO_ROOT, Settings, get_settings
 from app.ws import router as ws_router
@@ -116,6 +117,7 @@ def create_app(settings: Settings | None = None, runtime: Runtime | None = None)
     app.include_router(speech.router)
     app.include_router(diagnostics.router)
     app.include_router(ws_router)
+    app.include_router(foxglove_proxy.router)
     app.mount("/static", StaticFiles(directory=STATIC_DIR), name="static")
 
     @app.get("/", include_in_schema=False)

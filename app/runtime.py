@@ -12,6 +12,7 @@ from app.auth.access import AccessControl
 from app.auth.control import ControlLock
 from app.auth.scene_tokens import SceneTokens
 from app.auth.store import UserStore
+from app.foxglove.live import LiveFoxglove
 from app.mirror import FULL, LIGHT, SceneMirror, open_views
 from app.mirror_process import MirrorProcess, RemoteMirror
 from app.replay import SessionReplay
@@ -52,6 +53,8 @@ def _open_recorder(db: sessionmaker, worker: RobotPort, settings: Settings) -> S
         audio_dir=settings.audio_dir,
         camera_hz=settings.record_camera_hz,
         camera_width=settings.record_camera_width,
+        scan_hz=settings.record_scan_hz,
+        map_period_s=settings.record_map_period_s,
         maintenance=lambda: _maintain(db, settings, recorder.session_id),
     )
     return recorder
@@ -73,6 +76,7 @@ class Runtime:
     mirror_process: MirrorProcess | None = None  # the 3D mirrors, when they run in their own process
     scene_tokens: SceneTokens = field(default_factory=SceneTokens)  # what opens the 3D views (their gates check)
     gates: dict[str, SceneGate] = field(default_factory=dict)  # the 3D views' gates run in this process
+    foxglove: LiveFoxglove | None = None  # the live Foxglove server (humanoid serve --foxglove-port N)
 
     @staticmethod
     def start(settings: Settings, worker: RobotPort | None = None) -> Runtime:
@@ -165,6 +169,7 @@ class Runtime:
                 tls=tls.server_context() if tls else None,
             )
             gates["replay"].start()
+        foxglove = LiveFoxglove(worker, settings.foxglove_port).start() if settings.foxglove_port is not None else None
         rt = Runtime(
             settings,
             worker,
@@ -178,6 +183,7 @@ class Runtime:
             mirror_process=mirror_process,
             scene_tokens=tokens,
             gates=gates,
+            foxglove=foxglove,
         )
         clicks.runtime = rt
         if settings.supervise_worker and isinstance(worker, WorkerProcess):
@@ -219,6 +225,8 @@ class Runtime:
             self.mirror_process.stop()
         if self.replay is not None:
             self.replay.stop()
+        if self.foxglove is not None:
+            self.foxglove.stop()
         self.worker.stop()
         self.recorder.close()
         self.engine.dispose()

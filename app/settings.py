@@ -105,6 +105,15 @@ class Settings(BaseSettings):
     # sessions: what is recorded, how long it is kept, the replay's 3D view
     record_camera_hz: float = Field(1.0, ge=0, le=30, description="head camera frames stored per second (0: none)")
     record_camera_width: int = Field(320, ge=32, le=1920, description="stored camera frames are scaled to this width")
+    foxglove_port: int | None = Field(
+        None,
+        ge=0,
+        le=65535,
+        description="loopback port of the live Foxglove "
+        "WebSocket server (off when unset; reached from elsewhere at /foxglove)",
+    )
+    record_scan_hz: float = Field(2.0, ge=0, le=10, description="lidar scans stored per second (0: none)")
+    record_map_period_s: float = Field(2.0, ge=0, description="store the map when it changed, this often at most (s)")
     session_retention_days: float = Field(0.0, ge=0, description="delete sessions older than this (0: keep all)")
     session_retention_count: int = Field(0, ge=0, description="keep at most this many sessions (0: no limit)")
     replay_port: int = Field(8083, ge=1, le=65535, description="port of the session replay's 3D view")

@@ -6,7 +6,7 @@ they come from: another site's page cannot drive the robot through a logged-in o
 from __future__ import annotations
 
 from collections.abc import Callable
-from urllib.parse import urlsplit
+from urllib.parse import parse_qs, urlsplit
 
 from starlette.responses import JSONResponse, RedirectResponse
 from starlette.types import ASGIApp, Receive, Scope, Send
@@ -15,6 +15,9 @@ from app.auth.access import COOKIE_NAME, AccessControl
 from app.auth.roles import LOCAL_OPERATOR
 
 PUBLIC_PATHS = {"/api/health", "/api/auth/login", "/api/auth/me", "/login"}
+# Foxglove and Lichtblick connect from their own origin and cannot set headers: here an API token in the URL is
+# the only proof taken (never the login cookie, which another site's page could ride on), whatever the origin.
+TOKEN_IN_URL_PATHS = {"/foxglove"}
 PAGES = {"/", "/sessions"}
 SAFE_METHODS = {"GET", "HEAD", "OPTIONS"}
 WS_POLICY_VIOLATION = 1008
@@ -41,6 +44,9 @@ class AccessMiddleware:
         path = scope.get("path", "")
         headers = dict(scope.get("headers", []))
         websocket = scope["type"] == "websocket"
+        if path in TOKEN_IN_URL_PATHS:
+            await self._by_token_in_url(scope, receive, send, headers)
+            return
         if (websocket or scope.get("method") not in SAFE_METHODS) and not self._same_origin(headers):
             await self._refuse(scope, receive, send, 403, "cross-origin request refused (see HUMANOID_ALLOWED_ORIGINS)")
             return
@@ -57,6 +63,18 @@ class AccessMiddleware:
             if guarded:
                 await self._refuse(scope, receive, send, 401, "log in first (or send Authorization: Bearer <token>)")
                 return
+        await self.app(scope, receive, send)
+
+    async def _by_token_in_url(self, scope: Scope, receive: Receive, send: Send, headers: dict[bytes, bytes]) -> None:
+        query = parse_qs(scope.get("query_string", b"").decode("latin-1"))
+        token = (query.get("token") or [""])[0]
+        authorization = f"Bearer {token}" if token else headers.get(b"authorization", b"").decode("latin-1") or None
+        access = self.access()
+        who = LOCAL_OPERATOR if access is None else access.identify(None, authorization)
+        if who is None:
+            await self._refuse(scope, receive, send, 401, "an API token is needed: ?token=... (humanoid users token)")
+            return
+        scope.setdefault("state", {})["principal"] = who
         await self.app(scope, receive, send)
 
     def _same_origin(self, headers: dict[bytes, bytes]) -> bool:

@@ -1,13 +1,17 @@
-"""A session as an MCAP file with Foxglove's standard schemas, to open in Foxglove or Lichtblick:
+"""A session as an MCAP file with Foxglove's standard schemas, to open in Foxglove or Lichtblick (with
+docs/foxglove-layout.json, the robot, the camera and the log in one view):
 
+- `/robot_description` (std_msgs/String, JSON): the robot's URDF (robot.model.urdf, from the session's own model),
+  which the 3D panels draw the robot from;
 - `/tf` (foxglove.FrameTransforms): every body of the robot and of the world, as a kinematic tree from `world`;
-- `/scene` (foxglove.SceneUpdate): the bodies' shapes (the robot's collision shapes, the furniture, the objects),
-  each attached to its body's frame, so the 3D panel shows the robot moving with no URDF needed;
+  the robot's bodies are its URDF's links, so the drawn robot moves;
+- `/scene` (foxglove.SceneUpdate): the world's shapes (furniture, walls, objects), each on its body's frame;
 - `/joint_states` and `/joint_targets` (foxglove.JointStates): measured positions, velocities and torques, and
   what the controller commanded;
 - `/telemetry` (JSON): centre of mass, control tick time, battery voltage, current and charge, for plots;
 - `/camera/image/compressed` (foxglove.CompressedImage) and `/camera/annotations` (foxglove.ImageAnnotations: the
   detections' boxes and labels), when frames were recorded;
+- `/scan` (foxglove.LaserScan) and `/map` (foxglove.Grid): the lidar ring and the occupancy map, when recorded;
 - `/log` (foxglove.Log): events, commands, what was heard, plans and step results, with their levels;
 - `/plans` (JSON): every plan revision as the robot ran it.
 
@@ -18,6 +22,8 @@ Message times are the session's start plus simulated time, so a replay in Foxglo
 from __future__ import annotations
 
 import heapq
+import logging
+import zlib
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
@@ -27,48 +33,28 @@ from typing import Any
 import foxglove
 import mujoco
 import numpy as np
-from foxglove.channels import (
-    CompressedImageChannel,
-    FrameTransformsChannel,
-    ImageAnnotationsChannel,
-    JointStatesChannel,
-    LogChannel,
-    SceneUpdateChannel,
-)
 from foxglove.mcap import MCAPCompression, MCAPWriteOptions
 from foxglove.messages import (
     Color,
-    CompressedImage,
-    CubePrimitive,
-    CylinderPrimitive,
-    FrameTransform,
-    FrameTransforms,
     ImageAnnotations,
-    JointState,
-    JointStates,
-    Log,
-    LogLevel,
     Point2,
-    Point3,
     PointsAnnotation,
     PointsAnnotationType,
-    Pose,
-    Quaternion,
-    SceneEntity,
-    SceneUpdate,
-    SpherePrimitive,
     TextAnnotation,
     Timestamp,
-    TriangleListPrimitive,
-    Vector3,
 )
 from sqlalchemy import select
 from sqlalchemy.orm import sessionmaker
 
+from app.foxglove import messages as fm
+from app.foxglove.channels import FoxgloveChannels
+from app.foxglove.frames import SceneFrames
 from app.sessions.models import (
     CameraFrameRow,
     CommandRow,
     EventRow,
+    LidarScanRow,
+    OccupancyMapRow,
     PlanRow,
     SessionRow,
     StepResultRow,
@@ -78,33 +64,12 @@ from app.sessions.models import (
 from app.sessions.queries import SimClock, telemetry_bounds
 from app.sessions.scene import session_scene
 from app.sessions.telemetry_codec import decode_rows
+from robot.interface import OccupancyMap, ScanView
+from robot.model import humanoid_v1
+from robot.model.urdf import urdf_from_model
 from robot.telemetry import TelemetryLayout
 
-DETAILED_MESH_GROUP = 2  # the robot's display meshes (~930k triangles): the collision shapes stand in for them
-CAMERA_FRAME = "head_camera"
-TELEMETRY_SCHEMA = {
-    "title": "humanoid.Telemetry",
-    "type": "object",
-    "properties": {
-        "timestamp": {"type": "object", "properties": {"sec": {"type": "integer"}, "nsec": {"type": "integer"}}},
-        "sim_time_s": {"type": "number"},
-        "com": {"type": "object", "properties": {k: {"type": "number"} for k in "xyz"}},
-        "tick_ms": {"type": "number"},
-        "battery": {"type": "object", "properties": {k: {"type": "number"} for k in ("voltage_v", "current_a", "soc")}},
-    },
-}
-PLAN_SCHEMA = {
-    "title": "humanoid.Plan",
-    "type": "object",
-    "properties": {
-        "plan_id": {"type": "integer"},
-        "revision": {"type": "integer"},
-        "text": {"type": "string"},
-        "state": {"type": "string"},
-        "steps": {"type": "array", "items": {"type": "object"}},
-    },
-}
-_LEVELS = {0: LogLevel.Info, 1: LogLevel.Warning, 2: LogLevel.Error, 3: LogLevel.Warning}
+log = logging.getLogger(__name__)
 
 
 @dataclass(order=True)
@@ -115,23 +80,6 @@ class _Timed:
     order: int
     channel: Any = field(compare=False)
     message: Any = field(compare=False)
-
-
-def _stamp(t_ns: int) -> Timestamp:
-    sec, nsec = divmod(int(t_ns), 1_000_000_000)
-    return Timestamp(sec, nsec)
-
-
-def _quat(wxyz: np.ndarray) -> Quaternion:
-    return Quaternion(x=float(wxyz[1]), y=float(wxyz[2]), z=float(wxyz[3]), w=float(wxyz[0]))
-
-
-def _pose(pos: np.ndarray, wxyz: np.ndarray) -> Pose:
-    return Pose(position=Vector3(x=float(pos[0]), y=float(pos[1]), z=float(pos[2])), orientation=_quat(wxyz))
-
-
-def _finite(value: float) -> float | None:
-    return float(value) if np.isfinite(value) else None
 
 
 class _Timeline:
@@ -146,6 +94,15 @@ class _Timeline:
         return self._start_ns + round(max(sim - self._sim_zero, 0.0) * 1e9)
 
 
+def session_urdf(model: mujoco.MjModel, robot_model: str | None) -> str | None:
+    """The URDF of the robot in a session's model; None (with a warning) when URDF cannot describe it."""
+    try:
+        return urdf_from_model(model, humanoid_v1.TRUNK_BODY, robot_model or humanoid_v1.MODEL_NAME)
+    except (KeyError, ValueError) as exc:
+        log.warning("no robot description for this session's model: %s", exc)
+        return None
+
+
 def export_session_mcap(factory: sessionmaker, session_id: int, path: str | Path) -> dict[str, int]:
     """Write the session to `path`; returns the number of messages per topic. KeyError when there is no such
     session."""
@@ -154,8 +111,12 @@ def export_session_mcap(factory: sessionmaker, session_id: int, path: str | Path
         if row is None:
             raise KeyError(f"no session {session_id}")
         layout = TelemetryLayout.from_json(row.telemetry_layout) if row.telemetry_layout else None
-        first_sim = db.scalar(select(TelemetryChunkRow.sim_t0).where(TelemetryChunkRow.session_id == session_id)
-                              .order_by(TelemetryChunkRow.sim_t0).limit(1))  # fmt: skip
+        first_sim = db.scalar(
+            select(TelemetryChunkRow.sim_t0)
+            .where(TelemetryChunkRow.session_id == session_id)
+            .order_by(TelemetryChunkRow.sim_t0)
+            .limit(1)
+        )
         events = db.scalars(select(EventRow).where(EventRow.session_id == session_id).order_by(EventRow.seq)).all()
         clock = SimClock.of(list(events), telemetry_bounds(db, session_id))
         sim_zero = first_sim if first_sim is not None else (events[0].sim_time_s if events else 0.0)
@@ -165,24 +126,36 @@ def export_session_mcap(factory: sessionmaker, session_id: int, path: str | Path
         ctx = foxglove.Context()  # a private context: concurrent exports never mix
         options = MCAPWriteOptions(compression=MCAPCompression.Zstd, compression_threads=0)
         with foxglove.open_mcap(str(path), allow_overwrite=True, context=ctx, writer_options=options) as writer:
-            channels = _Channels(ctx)
-            writer.write_metadata("session", {
-                "id": str(row.id), "kind": row.kind, "seed": str(row.seed), "robot_model": row.robot_model or "",
-                "started_at": row.started_at.isoformat(), "outcome": row.outcome or "",
-                "time_base": "session start + simulated time",
-            })  # fmt: skip
-            writer.attach(log_time=timeline.ns(sim_zero), create_time=timeline.ns(sim_zero), name="scene.xml",
-                          media_type="application/xml", data=(row.scene_mjcf or "").encode())  # fmt: skip
-            side = list(_side_messages(db, session_id, channels, timeline, clock, list(events), model))
+            channels = FoxgloveChannels(ctx)
+            writer.write_metadata(
+                "session",
+                {
+                    "id": str(row.id),
+                    "kind": row.kind,
+                    "seed": str(row.seed),
+                    "robot_model": row.robot_model or "",
+                    "started_at": row.started_at.isoformat(),
+                    "outcome": row.outcome or "",
+                    "time_base": "session start + simulated time",
+                },
+            )
+            writer.attach(
+                log_time=timeline.ns(sim_zero),
+                create_time=timeline.ns(sim_zero),
+                name="scene.xml",
+                media_type="application/xml",
+                data=(row.scene_mjcf or "").encode(),
+            )
+            frames = SceneFrames(model)
+            side = list(_side_messages(db, session_id, channels, timeline, clock, list(events), frames, row))
             heapq.heapify(side)
             order = len(side)
-            bodies = _Bodies(model)
             for rows in _telemetry_chunks(db, session_id):
                 for r in rows:
                     t_ns = timeline.ns(r[0])
                     while side and side[0].t_ns <= t_ns:
                         _log(heapq.heappop(side), counts)
-                    for item in _telemetry_messages(r, t_ns, layout, bodies, channels):
+                    for item in _telemetry_messages(r, t_ns, layout, frames, channels):
                         order += 1
                         _log(_Timed(t_ns, order, *item), counts)
             while side:
@@ -196,208 +169,149 @@ def _log(item: _Timed, counts: dict[str, int]) -> None:
     counts[topic] = counts.get(topic, 0) + 1
 
 
-class _Channels:
-    def __init__(self, ctx: foxglove.Context) -> None:
-        self.tf = FrameTransformsChannel("/tf", context=ctx)
-        self.scene = SceneUpdateChannel("/scene", context=ctx)
-        self.joints = JointStatesChannel("/joint_states", context=ctx)
-        self.targets = JointStatesChannel("/joint_targets", context=ctx)
-        self.telemetry = foxglove.Channel("/telemetry", schema=TELEMETRY_SCHEMA, context=ctx)
-        self.camera = CompressedImageChannel("/camera/image/compressed", context=ctx)
-        self.annotations = ImageAnnotationsChannel("/camera/annotations", context=ctx)
-        self.log = LogChannel("/log", context=ctx)
-        self.plans = foxglove.Channel("/plans", schema=PLAN_SCHEMA, context=ctx)
-
-
 def _telemetry_chunks(db: Any, session_id: int) -> Iterator[np.ndarray]:
-    for (blob,) in db.execute(select(TelemetryChunkRow.data).where(TelemetryChunkRow.session_id == session_id)
-                              .order_by(TelemetryChunkRow.sim_t0, TelemetryChunkRow.first_seq)):  # fmt: skip
+    query = (
+        select(TelemetryChunkRow.data)
+        .where(TelemetryChunkRow.session_id == session_id)
+        .order_by(TelemetryChunkRow.sim_t0, TelemetryChunkRow.first_seq)
+    )
+    for (blob,) in db.execute(query):
         yield decode_rows(blob)
 
 
-# ---------------------------------------------------------------------------------------------------------------
-# the scene and its motion
-
-
-class _Bodies:
-    """Body poses from a telemetry row (qpos, mocap), as transforms from each body's parent."""
-
-    def __init__(self, model: mujoco.MjModel) -> None:
-        self.model = model
-        self.data = mujoco.MjData(model)
-        self.names = ["world"] + [model.body(i).name or f"body_{i}" for i in range(1, model.nbody)]
-        self.parents = np.asarray(model.body_parentid[1:], dtype=int)
-
-    def relative_poses(self, qpos: np.ndarray, mocap: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-        """Each body's (1..nbody-1) translation and rotation (wxyz) in its parent's frame."""
-        m, d = self.model, self.data
-        n = min(qpos.size, m.nq)
-        d.qpos[:n] = np.nan_to_num(qpos[:n])
-        if mocap is not None and mocap.size == d.mocap_pos.size and np.all(np.isfinite(mocap)):
-            d.mocap_pos[:] = mocap.reshape(d.mocap_pos.shape)
-        mujoco.mj_kinematics(m, d)
-        parents = self.parents
-        rot_p = d.xmat[parents].reshape(-1, 3, 3)
-        translation = np.einsum("bji,bj->bi", rot_p, d.xpos[1:] - d.xpos[parents])
-        return translation, _quat_multiply(_quat_conjugate(d.xquat[parents]), d.xquat[1:])
-
-    def transforms(self, qpos: np.ndarray, mocap: np.ndarray | None, stamp: Timestamp) -> FrameTransforms:
-        translation, rotation = self.relative_poses(qpos, mocap)
-        names = self.names
-        out = [
-            FrameTransform(timestamp=stamp, parent_frame_id=names[p], child_frame_id=names[b + 1],
-                           translation=Vector3(x=float(t[0]), y=float(t[1]), z=float(t[2])), rotation=_quat(q))
-            for b, (p, t, q) in enumerate(zip(self.parents, translation, rotation, strict=True))
-        ]  # fmt: skip
-        return FrameTransforms(transforms=out)
-
-    def scene(self, stamp: Timestamp) -> SceneUpdate:
-        """Every drawable geom as a primitive in its body's frame (frame-locked: it moves with the body)."""
-        m = self.model
-        by_body: dict[int, dict[str, list]] = {}
-        for g in range(m.ngeom):
-            if m.geom_group[g] == DETAILED_MESH_GROUP or m.geom_rgba[g][3] == 0:
-                continue
-            prims = by_body.setdefault(int(m.geom_bodyid[g]), {"cubes": [], "spheres": [], "cylinders": [],
-                                                               "triangles": []})  # fmt: skip
-            self._add_geom(g, prims)
-        entities = [
-            SceneEntity(timestamp=stamp, frame_id=self.names[b], id=self.names[b], frame_locked=True, **prims)
-            for b, prims in by_body.items()
-        ]
-        return SceneUpdate(entities=entities)
-
-    def _add_geom(self, g: int, prims: dict[str, list]) -> None:
-        m = self.model
-        rgba = m.mat_rgba[m.geom_matid[g]] if m.geom_matid[g] >= 0 else m.geom_rgba[g]
-        color = Color(r=float(rgba[0]), g=float(rgba[1]), b=float(rgba[2]), a=float(rgba[3]))
-        pose = _pose(m.geom_pos[g], m.geom_quat[g])
-        size = m.geom_size[g]
-        kind = m.geom_type[g]
-        if kind == mujoco.mjtGeom.mjGEOM_BOX:
-            prims["cubes"].append(CubePrimitive(pose=pose, size=_vec(2 * size), color=color))
-        elif kind == mujoco.mjtGeom.mjGEOM_PLANE:
-            extent = [2 * s if s > 0 else 20.0 for s in size[:2]]
-            prims["cubes"].append(CubePrimitive(pose=pose, size=_vec([extent[0], extent[1], 0.002]), color=color))
-        elif kind == mujoco.mjtGeom.mjGEOM_SPHERE:
-            prims["spheres"].append(SpherePrimitive(pose=pose, size=_vec([2 * size[0]] * 3), color=color))
-        elif kind == mujoco.mjtGeom.mjGEOM_ELLIPSOID:
-            prims["spheres"].append(SpherePrimitive(pose=pose, size=_vec(2 * size), color=color))
-        elif kind in (mujoco.mjtGeom.mjGEOM_CYLINDER, mujoco.mjtGeom.mjGEOM_CAPSULE):
-            r, h = size[0], size[1]
-            prims["cylinders"].append(CylinderPrimitive(pose=pose, size=_vec([2 * r, 2 * r, 2 * h]), bottom_scale=1.0,
-                                                        top_scale=1.0, color=color))  # fmt: skip
-            if kind == mujoco.mjtGeom.mjGEOM_CAPSULE:
-                rot = np.zeros(9)
-                mujoco.mju_quat2Mat(rot, m.geom_quat[g])
-                axis = rot.reshape(3, 3)[:, 2]
-                for sign in (-1.0, 1.0):
-                    centre = m.geom_pos[g] + sign * h * axis
-                    prims["spheres"].append(SpherePrimitive(pose=_pose(centre, m.geom_quat[g]),
-                                                            size=_vec([2 * r] * 3), color=color))  # fmt: skip
-        elif kind == mujoco.mjtGeom.mjGEOM_MESH:
-            mesh = m.geom_dataid[g]
-            verts = m.mesh_vert[m.mesh_vertadr[mesh] : m.mesh_vertadr[mesh] + m.mesh_vertnum[mesh]]
-            faces = m.mesh_face[m.mesh_faceadr[mesh] : m.mesh_faceadr[mesh] + m.mesh_facenum[mesh]]
-            points = [Point3(x=float(v[0]), y=float(v[1]), z=float(v[2])) for v in verts]
-            prims["triangles"].append(TriangleListPrimitive(pose=pose, points=points, color=color,
-                                                            indices=[int(i) for i in faces.ravel()]))  # fmt: skip
-
-
-def _quat_conjugate(q: np.ndarray) -> np.ndarray:
-    return q * np.array([1.0, -1.0, -1.0, -1.0])
-
-
-def _quat_multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise Hamilton products of (n, 4) wxyz quaternions."""
-    w1, x1, y1, z1 = a.T
-    w2, x2, y2, z2 = b.T
-    return np.stack([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2], axis=1)  # fmt: skip
-
-
-def _vec(values: Any) -> Vector3:
-    return Vector3(x=float(values[0]), y=float(values[1]), z=float(values[2]))
-
-
-def _telemetry_messages(r: np.ndarray, t_ns: int, layout: TelemetryLayout | None, bodies: _Bodies,
-                        channels: _Channels) -> Iterator[tuple[Any, Any]]:  # fmt: skip
-    stamp = _stamp(t_ns)
+def _telemetry_messages(
+    r: np.ndarray, t_ns: int, layout: TelemetryLayout | None, frames: SceneFrames, channels: FoxgloveChannels
+) -> Iterator[tuple[Any, Any]]:
     if layout is None:
         return
     s = layout.slices()
     mocap = r[s["mocap_pos"]] if "mocap_pos" in s else None
-    yield channels.tf, bodies.transforms(r[s["qpos"]], mocap, stamp)
+    yield channels.tf, frames.transforms(r[s["qpos"]], mocap, t_ns)
     if "joint_position" not in s:
         return
     names = layout.joint_names
     pos, vel, torque, target = (r[s[k]] for k in ("joint_position", "joint_velocity", "joint_torque", "joint_target"))
-    yield channels.joints, JointStates(timestamp=stamp, joints=[
-        JointState(name=n, position=_finite(pos[i]), velocity=_finite(vel[i]), effort=_finite(torque[i]))
-        for i, n in enumerate(names)
-    ])  # fmt: skip
-    yield channels.targets, JointStates(timestamp=stamp, joints=[
-        JointState(name=n, position=_finite(target[i])) for i, n in enumerate(names)
-    ])  # fmt: skip
+    yield channels.joints, fm.joint_states(names, pos, t_ns, velocities=vel, efforts=torque)
+    yield channels.targets, fm.joint_states(names, target, t_ns)
     com = r[s["com"]]
-    yield channels.telemetry, {
-        "timestamp": {"sec": stamp.sec, "nsec": stamp.nsec},
-        "sim_time_s": float(r[0]),
-        "com": {"x": _finite(com[0]), "y": _finite(com[1]), "z": _finite(com[2])},
-        "tick_ms": _finite(r[s["tick_ms"]][0]),
-        "battery": {"voltage_v": _finite(r[s["battery_v"]][0]), "current_a": _finite(r[s["battery_a"]][0]),
-                    "soc": _finite(r[s["battery_soc"]][0])},
-    }  # fmt: skip
+    when = fm.stamp(t_ns)
+    yield (
+        channels.telemetry,
+        {
+            "timestamp": {"sec": when.sec, "nsec": when.nsec},
+            "sim_time_s": float(r[0]),
+            "com": {"x": fm.finite(com[0]), "y": fm.finite(com[1]), "z": fm.finite(com[2])},
+            "tick_ms": fm.finite(r[s["tick_ms"]][0]),
+            "battery": {
+                "voltage_v": fm.finite(r[s["battery_v"]][0]),
+                "current_a": fm.finite(r[s["battery_a"]][0]),
+                "soc": fm.finite(r[s["battery_soc"]][0]),
+            },
+        },
+    )
 
 
 # ---------------------------------------------------------------------------------------------------------------
 # everything else, which is small beside the telemetry
 
 
-def _side_messages(db: Any, sid: int, channels: _Channels, timeline: _Timeline, clock: SimClock,
-                   events: list[EventRow], model: mujoco.MjModel) -> Iterator[_Timed]:  # fmt: skip
+def scan_view(row: LidarScanRow) -> ScanView:
+    """A stored scan as the robot published it."""
+    ranges = tuple(float(v) for v in np.frombuffer(row.ranges, dtype="<f4"))
+    return ScanView(
+        row.sim_time_s, (row.x, row.y, row.yaw), row.height_m, row.angle_min, row.angle_increment, row.range_max, ranges
+    )
+
+
+def occupancy_map(row: OccupancyMapRow) -> OccupancyMap:
+    """A stored map as the robot published it."""
+    return OccupancyMap(
+        row.sim_time_s,
+        row.resolution,
+        (row.origin_x, row.origin_y),
+        row.width,
+        row.height,
+        zlib.decompress(row.data),
+        row.scans,
+    )
+
+
+def _side_messages(
+    db: Any,
+    sid: int,
+    channels: FoxgloveChannels,
+    timeline: _Timeline,
+    clock: SimClock,
+    events: list[EventRow],
+    frames: SceneFrames,
+    session: SessionRow,
+) -> Iterator[_Timed]:
     counter = iter(range(1_000_000_000))
     start = timeline.ns(None)
-    yield _Timed(start, next(counter), channels.scene, _Bodies(model).scene(_stamp(start)))
+    urdf = session_urdf(frames.model, session.robot_model)
+    if urdf is not None:
+        yield _Timed(start, next(counter), channels.description, fm.robot_description(urdf))
+    yield _Timed(start, next(counter), channels.scene, frames.world_scene(start))
 
-    def log(t_ns: int, level: int, name: str, message: str) -> _Timed:
-        return _Timed(
-            t_ns,
-            next(counter),
-            channels.log,
-            Log(timestamp=_stamp(t_ns), level=_LEVELS.get(level, LogLevel.Info), message=message, name=name),
-        )
+    def log_line(t_ns: int, level: int, name: str, message: str) -> _Timed:
+        return _Timed(t_ns, next(counter), channels.log, fm.log(t_ns, level, name, message))
 
     for e in events:
-        yield log(timeline.ns(e.sim_time_s), e.level, e.kind, e.message)
+        yield log_line(timeline.ns(e.sim_time_s), e.level, e.kind, e.message)
     for c in db.scalars(select(CommandRow).where(CommandRow.session_id == sid).order_by(CommandRow.id)):
         verdict = "accepted" if c.accepted else f"refused ({c.refusal}): {'; '.join(c.errors or [])}"
-        yield log(timeline.ns(clock.sim_at(c.received_at)), 0 if c.accepted else 1, f"command/{c.source}",
-                  f'"{c.text}" {verdict}')  # fmt: skip
+        t_ns = timeline.ns(clock.sim_at(c.received_at))
+        yield log_line(t_ns, 0 if c.accepted else 1, f"command/{c.source}", f'"{c.text}" {verdict}')
     for t in db.scalars(select(TranscriptRow).where(TranscriptRow.session_id == sid).order_by(TranscriptRow.id)):
-        yield log(timeline.ns(clock.sim_at(t.received_at)), 0, f"speech/{t.source}",
-                  f'heard "{t.text}" (confidence {t.confidence:.2f}, {t.engine})')  # fmt: skip
+        heard = f'heard "{t.text}" (confidence {t.confidence:.2f}, {t.engine})'
+        yield log_line(timeline.ns(clock.sim_at(t.received_at)), 0, f"speech/{t.source}", heard)
+    yield from _plans(db, sid, channels, timeline, clock, counter)
+    for f in db.scalars(select(CameraFrameRow).where(CameraFrameRow.session_id == sid).order_by(CameraFrameRow.id)):
+        t_ns = timeline.ns(f.sim_time_s)
+        yield _Timed(t_ns, next(counter), channels.camera, fm.compressed_image(f.jpeg, t_ns))
+        yield _Timed(t_ns, next(counter), channels.annotations, _annotations(f.detections or [], fm.stamp(t_ns)))
+    for scan in db.scalars(select(LidarScanRow).where(LidarScanRow.session_id == sid).order_by(LidarScanRow.id)):
+        t_ns = timeline.ns(scan.sim_time_s)
+        yield _Timed(t_ns, next(counter), channels.scan, fm.laser_scan(scan_view(scan), t_ns))
+    maps = select(OccupancyMapRow).where(OccupancyMapRow.session_id == sid).order_by(OccupancyMapRow.id)
+    for grid in db.scalars(maps):
+        t_ns = timeline.ns(grid.sim_time_s)
+        yield _Timed(t_ns, next(counter), channels.map, fm.occupancy_grid(occupancy_map(grid), t_ns))
+
+
+def _plans(
+    db: Any, sid: int, channels: FoxgloveChannels, timeline: _Timeline, clock: SimClock, counter: Iterator[int]
+) -> Iterator[_Timed]:
+    """Every plan revision, whole on /plans and as a line of the log (what it will do, step by step)."""
     steps: dict[int, list[dict[str, Any]]] = {}
     for st in db.scalars(select(StepResultRow).where(StepResultRow.session_id == sid).order_by(StepResultRow.id)):
         steps.setdefault(st.robot_plan_id, []).append(
-            {"index": st.step_index, "action": st.action, "args": st.args, "state": st.state, "detail": st.detail,
-             "sim_start_s": st.sim_start_s, "sim_end_s": st.sim_end_s}
-        )  # fmt: skip
+            {
+                "index": st.step_index,
+                "action": st.action,
+                "args": st.args,
+                "state": st.state,
+                "detail": st.detail,
+                "sim_start_s": st.sim_start_s,
+                "sim_end_s": st.sim_end_s,
+            }
+        )
     for p in db.scalars(select(PlanRow).where(PlanRow.session_id == sid).order_by(PlanRow.id)):
-        yield _Timed(timeline.ns(clock.sim_at(p.created_at)), next(counter), channels.plans,
-                     {"plan_id": p.robot_plan_id, "revision": p.revision, "text": p.text, "state": p.state,
-                      "steps": steps.get(p.robot_plan_id, p.plan.get("steps", []) if isinstance(p.plan, dict)
-                                         else [])})  # fmt: skip
-    for f in db.scalars(select(CameraFrameRow).where(CameraFrameRow.session_id == sid).order_by(CameraFrameRow.id)):
-        t_ns = timeline.ns(f.sim_time_s)
-        stamp = _stamp(t_ns)
+        t_ns = timeline.ns(clock.sim_at(p.created_at))
+        planned = p.plan.get("steps", []) if isinstance(p.plan, dict) else []
+        run = steps.get(p.robot_plan_id, planned)
         yield _Timed(
             t_ns,
             next(counter),
-            channels.camera,
-            CompressedImage(timestamp=stamp, frame_id=CAMERA_FRAME, data=f.jpeg, format="jpeg"),
+            channels.plans,
+            {"plan_id": p.robot_plan_id, "revision": p.revision, "text": p.text, "state": p.state, "steps": run},
         )
-        yield _Timed(t_ns, next(counter), channels.annotations, _annotations(f.detections or [], stamp))
+        listed = "; ".join(
+            f"{i + 1}. {st.get('action', '?')}({', '.join(str(v) for v in (st.get('args') or {}).values())})"
+            for i, st in enumerate(planned)
+        )
+        message = f'plan {p.robot_plan_id} r{p.revision} for "{p.text}": {listed or "no steps"} ({p.state})'
+        yield _Timed(t_ns, next(counter), channels.log, fm.log(t_ns, 0, "plan", message))
 
 
 def _annotations(detections: list[dict[str, Any]], stamp: Timestamp) -> ImageAnnotations:
@@ -405,9 +319,23 @@ def _annotations(detections: list[dict[str, Any]], stamp: Timestamp) -> ImageAnn
     boxes, labels = [], []
     for d in detections:
         x0, y0, x1, y1 = (float(v) for v in d["box"])
-        boxes.append(PointsAnnotation(timestamp=stamp, type=PointsAnnotationType.LineLoop, outline_color=green,
-                                      thickness=2.0, points=[Point2(x=x0, y=y0), Point2(x=x1, y=y0),
-                                                             Point2(x=x1, y=y1), Point2(x=x0, y=y1)]))  # fmt: skip
-        labels.append(TextAnnotation(timestamp=stamp, position=Point2(x=x0, y=max(y0 - 4.0, 0.0)), text=d["label"],
-                                     font_size=14.0, text_color=green))  # fmt: skip
+        corners = [Point2(x=x0, y=y0), Point2(x=x1, y=y0), Point2(x=x1, y=y1), Point2(x=x0, y=y1)]
+        boxes.append(
+            PointsAnnotation(
+                timestamp=stamp,
+                type=PointsAnnotationType.LineLoop,
+                outline_color=green,
+                thickness=2.0,
+                points=corners,
+            )
+        )
+        labels.append(
+            TextAnnotation(
+                timestamp=stamp,
+                position=Point2(x=x0, y=max(y0 - 4.0, 0.0)),
+                text=d["label"],
+                font_size=14.0,
+                text_color=green,
+            )
+        )
     return ImageAnnotations(timestamp=stamp, points=boxes, texts=labels)

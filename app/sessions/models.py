@@ -151,5 +151,43 @@ class CameraFrameRow(Base):
     detections: Mapped[list[dict[str, Any]] | None] = mapped_column(JSON)
 
 
+class LidarScanRow(Base):
+    """A lidar scan (as robot.interface.ScanView), a few a second: the ring of ranges and the estimated pose it was
+    taken from, for review and export (Foxglove's LaserScan)."""
+
+    __tablename__ = "lidar_scans"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    session_id: Mapped[int] = mapped_column(ForeignKey("sessions.id", ondelete="CASCADE"), index=True)
+    sim_time_s: Mapped[float] = mapped_column(Float)
+    wall_time: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+    x: Mapped[float] = mapped_column(Float)  # the sensor's estimated pose (world frame)
+    y: Mapped[float] = mapped_column(Float)
+    yaw: Mapped[float] = mapped_column(Float)
+    height_m: Mapped[float] = mapped_column(Float)
+    angle_min: Mapped[float] = mapped_column(Float)
+    angle_increment: Mapped[float] = mapped_column(Float)
+    range_max: Mapped[float] = mapped_column(Float)
+    ranges: Mapped[bytes] = mapped_column(LargeBinary)  # float32, little-endian; inf where nothing was hit
+
+
+class OccupancyMapRow(Base):
+    """The occupancy map (as robot.interface.OccupancyMap) when it changed, at most every few seconds."""
+
+    __tablename__ = "occupancy_maps"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    session_id: Mapped[int] = mapped_column(ForeignKey("sessions.id", ondelete="CASCADE"), index=True)
+    sim_time_s: Mapped[float] = mapped_column(Float)
+    wall_time: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+    resolution: Mapped[float] = mapped_column(Float)
+    origin_x: Mapped[float] = mapped_column(Float)  # the corner of cell (0, 0)
+    origin_y: Mapped[float] = mapped_column(Float)
+    width: Mapped[int] = mapped_column(Integer)
+    height: Mapped[int] = mapped_column(Integer)
+    scans: Mapped[int] = mapped_column(Integer)  # scans integrated so far
+    data: Mapped[bytes] = mapped_column(LargeBinary)  # zlib of int8 cells, x fastest: 0-100, or -1 unknown
+
+
 # The users' tables share this metadata (one database, one migration history): registered with it here.
 from app.auth import models as _auth_models  # noqa: E402, F401

@@ -1,4 +1,5 @@
-"""Records a session: commands, transcripts, plans, step results, events, telemetry and camera frames.
+"""Records a session: commands, transcripts, plans, step results, events, telemetry, camera frames, lidar scans
+and the occupancy map.
 
 Durability, so that a crash (kill -9 of the server) loses at most the last second of samples and nothing else:
 - a command is written before the request that sent it is answered;
@@ -17,6 +18,7 @@ import queue
 import socket
 import threading
 import time
+import zlib
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -33,6 +35,8 @@ from app.sessions.models import (
     CameraFrameRow,
     CommandRow,
     EventRow,
+    LidarScanRow,
+    OccupancyMapRow,
     PlanRow,
     SessionRow,
     StepResultRow,
@@ -111,12 +115,18 @@ class SessionRecorder:
         camera_hz: float = 1.0,
         camera_width: int = 320,
         maintenance: Callable[[], object] | None = None,
+        scan_hz: float = 2.0,
+        map_period_s: float = 2.0,
     ) -> None:
         self._factory = session_factory
         self._audio_dir = audio_dir  # where the robot microphone's recordings are moved to, by session
         self._port = port
         self._camera_period = 1.0 / camera_hz if camera_hz > 0 else None
         self._camera_width = camera_width  # frames are stored this wide (a quarter of the pixels of 640 x 480)
+        self._scan_period = 1.0 / scan_hz if scan_hz > 0 else None
+        self._map_period = map_period_s if map_period_s > 0 else None  # the map when it changed, at most this often
+        self._last_scan_time: float | None = None
+        self._last_map_scans = -1
         self._maintenance = maintenance  # run once the session is open, then every few minutes
         self._pending: queue.Queue[Any] = queue.Queue()
         self._write_lock = threading.Lock()  # one writer at a time: the thread, or a command being recorded
@@ -199,7 +209,7 @@ class SessionRecorder:
 
     def _run(self) -> None:
         next_chunk = time.monotonic() + TELEMETRY_WRITE_S
-        next_camera = time.monotonic()
+        next_camera = next_scan = next_map = time.monotonic()
         next_maintenance = time.monotonic()
         while not self._stop.is_set():
             event = self._subscription.get(timeout=POLL_S)
@@ -212,6 +222,12 @@ class SessionRecorder:
             if self._camera_period is not None and now >= next_camera:
                 self._sample_camera()
                 next_camera = now + self._camera_period
+            if self._scan_period is not None and now >= next_scan:
+                self._sample_scan()
+                next_scan = now + self._scan_period
+            if self._map_period is not None and now >= next_map:
+                self._sample_map()
+                next_map = now + self._map_period
             chunk_due = now >= next_chunk or sum(len(r) for r in self._telemetry_rows) >= MAX_CHUNK_ROWS
             if chunk_due:
                 self._queue_telemetry_chunk()
@@ -274,6 +290,48 @@ class SessionRecorder:
             CameraFrameRow(session_id=self.session_id, seq=image.seq, sim_time_s=image.sim_time_s, wall_time=_utc(),
                            width=width, height=height, jpeg=jpeg, detections=detections)
         )  # fmt: skip
+
+    def _sample_scan(self) -> None:
+        scan = self._port.sensor_feed().scan
+        if scan is None or scan.sim_time_s == self._last_scan_time:
+            return
+        self._last_scan_time = scan.sim_time_s
+        x, y, yaw = scan.pose
+        self._pending.put(
+            LidarScanRow(
+                session_id=self.session_id,
+                sim_time_s=scan.sim_time_s,
+                wall_time=_utc(),
+                x=x,
+                y=y,
+                yaw=yaw,
+                height_m=scan.height_m,
+                angle_min=scan.angle_min,
+                angle_increment=scan.angle_increment,
+                range_max=scan.range_max,
+                ranges=np.asarray(scan.ranges, dtype="<f4").tobytes(),
+            )
+        )
+
+    def _sample_map(self) -> None:
+        grid = self._port.sensor_feed().map
+        if grid is None or grid.scans == self._last_map_scans:
+            return
+        self._last_map_scans = grid.scans
+        self._pending.put(
+            OccupancyMapRow(
+                session_id=self.session_id,
+                sim_time_s=grid.sim_time_s,
+                wall_time=_utc(),
+                resolution=grid.resolution,
+                origin_x=grid.origin[0],
+                origin_y=grid.origin[1],
+                width=grid.width,
+                height=grid.height,
+                scans=grid.scans,
+                data=zlib.compress(grid.data),
+            )
+        )
 
     def _on_event(self, event: Event) -> None:
         if event.seq <= self._history_seq:  # already taken from the history

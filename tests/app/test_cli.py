@@ -182,3 +182,15 @@ def test_sessions_are_listed_shown_exported_imported_and_deleted_from_the_comman
     refused = humanoid(tmp_path, "sessions", "import", str(bad))
     assert refused.returncode == 1 and "not a session export" in refused.stderr
     assert json.loads(humanoid(tmp_path, "sessions", "list", "--json").stdout)["total"] == 1
+
+
+def test_describe_writes_the_robots_urdf_alone(tmp_path) -> None:
+    import yourdfpy
+
+    done = humanoid(tmp_path, "describe", "--urdf", "-o", str(tmp_path / "robot.urdf"))
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == ""  # the file alone: nothing else on standard output
+    robot = yourdfpy.URDF.load(str(tmp_path / "robot.urdf"), load_meshes=False, load_collision_meshes=False)
+    assert robot.robot.name == "humanoid_v1" and len(robot.actuated_joint_names) == 24
+    summary = humanoid(tmp_path, "describe")
+    assert summary.returncode == 0 and "r_knee" in summary.stdout

@@ -21,8 +21,18 @@ def test_upgrade_creates_the_schema_and_matches_the_models(tmp_path) -> None:
     upgrade_to_head(url)  # also creates the missing directory
     engine = create_engine(url)
     tables = set(inspect(engine).get_table_names())
-    assert {"sessions", "commands", "plans", "step_results", "events", "transcripts", "telemetry_chunks",
-            "camera_frames"} <= tables  # fmt: skip
+    assert {
+        "sessions",
+        "commands",
+        "plans",
+        "step_results",
+        "events",
+        "transcripts",
+        "telemetry_chunks",
+        "camera_frames",
+        "lidar_scans",
+        "occupancy_maps",
+    } <= tables
     with engine.connect() as connection:
         diff = compare_metadata(MigrationContext.configure(connection), Base.metadata)
     assert diff == []

@@ -216,6 +216,7 @@ def check_mcap(factory, sid: int, path: Path) -> None:
         schemas = {c.topic: summary.schemas[c.schema_id].name for c in summary.channels.values()}
         assert schemas["/tf"] == "foxglove.FrameTransforms" and schemas["/joint_states"] == "foxglove.JointStates"
         assert schemas["/log"] == "foxglove.Log" and schemas["/scene"] == "foxglove.SceneUpdate"
+        assert schemas["/robot_description"] == "std_msgs/String"  # as the 3D panels' URDF layer reads it
         seen: dict[str, int] = {}
         last_time = 0
         for _, channel, message, decoded in reader.iter_decoded_messages(topics=["/tf", "/joint_states", "/log"]):
@@ -228,6 +229,7 @@ def check_mcap(factory, sid: int, path: Path) -> None:
                 children = {t.child_frame_id: t.parent_frame_id for t in decoded.transforms}
                 assert children["body_link"] == "world" and children["r_knee_link"] == "r_hip_pitch_link"
     assert seen["/tf"] == seen["/joint_states"] == len(rows) == counts["/tf"]
+    assert counts["/robot_description"] == 1
     assert seen["/log"] == counts["/log"] >= 5
 
 
@@ -253,9 +255,9 @@ def test_camera_frames_are_stored_at_a_quarter_of_the_pixels() -> None:
 def test_exported_transforms_compose_back_to_the_bodies_world_poses(scene_model) -> None:
     import mujoco
 
-    from app.sessions.mcap_export import _Bodies
+    from app.foxglove.frames import SceneFrames
 
-    bodies = _Bodies(scene_model)
+    bodies = SceneFrames(scene_model)
     qpos = scene_model.qpos0.copy()
     qpos[:3] = (0.4, -0.3, 0.28)
     qpos[3:7] = (np.cos(0.3), 0.0, 0.0, np.sin(0.3))
