@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from app.bench.browser import launch_chromium, wait_for_scene_render
+from app.bench.cpu_share import CpuShare
 from app.bench.server import ServerProcess
 
 TARGETS = {"estop_p99_ms": 15.0, "tick_p99_ms": 2.0, "rtf_min": 0.995}
@@ -53,7 +54,7 @@ def headless_rtf(sim_seconds: float = 20.0, seed: int = 0) -> dict[str, float]:
     return {"sim_s": round(sim, 2), "wall_s": round(wall, 3), "rtf": round(sim / wall, 2)}
 
 
-def _press_estop(page: Any, server: ServerProcess, presses: int) -> list[float]:
+def _press_estop(page: Any, server: ServerProcess, presses: int) -> tuple[list[float], dict[str, Any]]:
     for i in range(presses):
         page.click("#estop")
         page.wait_for_function(f"window.humanoid.estopLatencies.length > {i}", polling=5, timeout=10_000)
@@ -64,7 +65,29 @@ def _press_estop(page: Any, server: ServerProcess, presses: int) -> list[float]:
             "window.humanoid.state && !window.humanoid.state.estop_latched", polling=5, timeout=10_000
         )
         time.sleep(random.uniform(0.1, 0.4))  # a human's pace, and not phase-locked with the control ticks
-    return [float(v) for v in page.evaluate("window.humanoid.estopLatencies")]
+    latencies = [float(v) for v in page.evaluate("window.humanoid.estopLatencies")]
+    return latencies, _where_the_time_goes(page.evaluate("[window.humanoid.estopParts, window.humanoid.estopWaits]"))
+
+
+def _where_the_time_goes(measured: list[Any]) -> dict[str, Any]:
+    """Each press's latency in parts: in the page (the event waiting for its handler on the page's main thread),
+    page to server (sending, the network, the server's event loop), server to robot process, and the robot
+    applying it; and which of the page's two sockets brought it first."""
+    parts, waits = measured
+    in_page = [float(w) for w in waits]
+    to_server = [p["total"] - p["server"] for p in parts if p.get("server") is not None]
+    server_to_robot = [p["server"] - p["robot"] for p in parts if p.get("server") is not None]
+    robot = [p["robot"] for p in parts if p.get("robot") is not None]
+    sources: dict[str, int] = {}
+    for p in parts:
+        sources[p.get("source", "?")] = sources.get(p.get("source", "?"), 0) + 1
+    return {
+        "event_to_handler_ms": _percentiles(in_page) if in_page else None,
+        "page_to_server_ms": _percentiles(to_server) if to_server else None,
+        "server_to_robot_ms": _percentiles(server_to_robot) if server_to_robot else None,
+        "robot_applies_ms": _percentiles(robot) if robot else None,
+        "first_path": sources,
+    }
 
 
 def run_core(presses: int = 100, viewers: int = 2, duration_s: float = 30.0) -> dict[str, Any]:
@@ -102,8 +125,11 @@ def run_core(presses: int = 100, viewers: int = 2, duration_s: float = 30.0) -> 
             "rtf": round(rtf, 4),
             "sim_lag_ms": round(((wall_after - wall_before) - (after["sim_time_s"] - before["sim_time_s"])) * 1e3, 1),
         }
-        latencies = _press_estop(operator, server, presses)
+        with CpuShare() as cpu:
+            latencies, parts = _press_estop(operator, server, presses)
+        result["cpu_percent_of_a_core_while_pressing"] = cpu.shares()
         result["estop_latency_ms"] = _percentiles(latencies)
+        result["estop_parts"] = parts
         priority = [e["message"] for e in server.get("/api/events") if e["kind"] == "control/priority"]
         result["serve"]["control_priority"] = priority[0] if priority else "unknown"
         browser.close()

@@ -3,7 +3,8 @@
 "use strict";
 
 const $ = (id) => document.getElementById(id);
-const humanoid = { ws: null, state: null, estopLatencies: [], events: [], config: null, planSources: {} };
+const humanoid = { ws: null, state: null, estopLatencies: [], estopParts: [], estopWaits: [], events: [], config: null,
+                   planSources: {} };
 window.humanoid = humanoid;
 
 async function loadConfig() {
@@ -106,6 +107,7 @@ function setConn(text, cls) { const el = $("conn"); el.textContent = text; el.cl
 function pressEStop(ev) {
   // The event's own timestamp: latency is measured from the moment the browser saw the press.
   const clientTime = (performance.timeOrigin + (ev && ev.timeStamp ? ev.timeStamp : performance.now())) / 1000;
+  if (ev && ev.timeStamp) humanoid.estopWaits.push(performance.now() - ev.timeStamp); // the press waited in the page
   const message = JSON.stringify({ type: "estop", client_time_s: clientTime });
   let sent = 0;
   for (const ws of [humanoid.ws, humanoid.stopWs]) {
@@ -287,6 +289,8 @@ function addEvent(e) {
   }
   if (e.kind === "estop/latched" && e.data.latency_ms !== undefined) {
     humanoid.estopLatencies.push(e.data.latency_ms);
+    humanoid.estopParts.push({ total: e.data.latency_ms, server: e.data.server_latency_ms, robot: e.data.worker_latency_ms,
+                               source: e.data.source });
     $("st-estop").textContent = `${fmt(e.data.latency_ms, 1)} ms (press to control loop)`;
   }
   const li = document.createElement("li");
