@@ -98,7 +98,7 @@ class SceneGate:
             finally:
                 server.close()
                 self._close_all()
-                loop.run_until_complete(asyncio.sleep(0))
+                loop.run_until_complete(_cancel_others())
                 loop.close()
 
         self._thread = threading.Thread(target=run, name=f"scene-gate-{self.name}", daemon=True)
@@ -128,6 +128,12 @@ class SceneGate:
     # one connection --------------------------------------------------------------------------------------------
 
     async def _serve(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        try:
+            await self._admit_and_relay(reader, writer)
+        except (ConnectionError, OSError, asyncio.IncompleteReadError):  # the viewer went away: nothing to say
+            writer.close()
+
+    async def _admit_and_relay(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
         try:
             head = await asyncio.wait_for(reader.readuntil(b"\r\n\r\n"), HEAD_TIMEOUT_S)
         except (TimeoutError, asyncio.IncompleteReadError, asyncio.LimitOverrunError, ConnectionError, ssl.SSLError):
@@ -315,6 +321,14 @@ async def _copy_response(src: asyncio.StreamReader, dst: asyncio.StreamWriter) -
         head = await src.readuntil(b"\r\n\r\n")
         dst.write(head[:-2] + SECURITY_HEADERS + b"\r\n")
         await _copy(src, dst)
+
+
+async def _cancel_others() -> None:
+    """Every connection's task ends with the gate."""
+    tasks = [task for task in asyncio.all_tasks() if task is not asyncio.current_task()]
+    for task in tasks:
+        task.cancel()
+    await asyncio.gather(*tasks, return_exceptions=True)
 
 
 async def _first_done(*coroutines: object) -> None:
