@@ -71,8 +71,9 @@ def _press_estop(page: Any, server: ServerProcess, presses: int) -> tuple[list[f
 
 def _where_the_time_goes(measured: list[Any]) -> dict[str, Any]:
     """Each press's latency in parts: in the page (the event waiting for its handler on the page's main thread),
-    page to server (sending, the network, the server's event loop), server to robot process, and the robot
-    applying it; and which of the page's two sockets brought it first."""
+    page to server (that wait, then sending: the browser's network service, the kernel, the server's event loop),
+    handler to server (the sending alone), server to robot process, and the robot applying it; and which of the
+    page's two sockets brought it first."""
     parts, waits = measured
     in_page = [float(w) for w in waits]
     to_server = [p["total"] - p["server"] for p in parts if p.get("server") is not None]
@@ -81,8 +82,11 @@ def _where_the_time_goes(measured: list[Any]) -> dict[str, Any]:
     sources: dict[str, int] = {}
     for p in parts:
         sources[p.get("source", "?")] = sources.get(p.get("source", "?"), 0) + 1
+    # (one wait and one latched event per press, in order)
+    sent_to_server = [total - wait for total, wait in zip(to_server, in_page, strict=False)]
     return {
         "event_to_handler_ms": _percentiles(in_page) if in_page else None,
+        "handler_to_server_ms": _percentiles(sent_to_server) if sent_to_server else None,
         "page_to_server_ms": _percentiles(to_server) if to_server else None,
         "server_to_robot_ms": _percentiles(server_to_robot) if server_to_robot else None,
         "robot_applies_ms": _percentiles(robot) if robot else None,
