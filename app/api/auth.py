@@ -79,6 +79,7 @@ def me(request: Request, rt: RuntimeDep) -> dict[str, Any]:
 
 @router.get("/control")
 def control(rt: RuntimeDep, _: PrincipalDep) -> dict[str, Any]:
+    """Who holds control (`holder`: a name, or null when nobody does) and since when."""
     return control_json(rt)
 
 
@@ -97,6 +98,7 @@ def take_control(body: TakeControlIn, rt: RuntimeDep, who: PrincipalDep) -> dict
 
 @router.post("/control/release")
 def release_control(rt: RuntimeDep, who: PrincipalDep) -> dict[str, Any]:
+    """Give control back (anyone's page shows it free); 409 when the caller does not have it."""
     if not rt.control.release(who):
         raise HTTPException(409, detail={"message": "you do not have control"})
     return control_json(rt)

@@ -78,6 +78,8 @@ def map_png(grid: OccupancyMap) -> bytes:
 
 @router.get("/api/perception")
 def perception(rt: RuntimeDep) -> dict[str, Any]:
+    """Perception's status: the sensors' rates, the latest detections and the world memory (where each object
+    was last seen); `{"status": "off"}` without perception."""
     return perception_json(rt.worker.state().perception)
 
 
@@ -100,6 +102,8 @@ def camera_jpeg(rt: RuntimeDep) -> Response:
 
 @router.get("/api/scan")
 def scan(rt: RuntimeDep) -> dict[str, Any]:
+    """The latest lidar scan, as sensor_msgs/LaserScan (no return: null), with the pose it was mapped from;
+    503 before the first."""
     latest = rt.worker.sensor_feed().scan
     if latest is None:
         raise HTTPException(503, "no lidar scan yet")
@@ -108,6 +112,7 @@ def scan(rt: RuntimeDep) -> dict[str, Any]:
 
 @router.get("/api/map")
 def occupancy_map(rt: RuntimeDep) -> dict[str, Any]:
+    """The occupancy map, as nav_msgs/OccupancyGrid; 503 before the first scan."""
     grid = rt.worker.sensor_feed().map
     if grid is None:
         raise HTTPException(503, "no occupancy map yet")
@@ -116,6 +121,7 @@ def occupancy_map(rt: RuntimeDep) -> dict[str, Any]:
 
 @router.get("/api/map.png", response_class=Response, responses={200: {"content": {"image/png": {}}}})
 def occupancy_map_png(rt: RuntimeDep) -> Response:
+    """The occupancy map as an image; its origin, resolution and scan count in `X-Map-*` headers."""
     grid = rt.worker.sensor_feed().map
     if grid is None:
         raise HTTPException(503, "no occupancy map yet")

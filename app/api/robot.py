@@ -134,6 +134,9 @@ async def health(rt: RuntimeDep, response: Response) -> dict[str, Any]:
 
 @router.get("/config")
 def config(rt: RuntimeDep) -> dict[str, Any]:
+    """What this server runs: the 3D views' ports, the seed, the robot, its places and objects, control and
+    physics rates, the planner, the robot's microphone and speaker, whether plans wait for approval, the session
+    being recorded and the diagnostics thresholds."""
     description = rt.worker.describe()
     return {
         "viser_ports": {name: rt.scene_port(name) for name in rt.mirrors},
@@ -157,11 +160,14 @@ def config(rt: RuntimeDep) -> dict[str, Any]:
 
 @router.get("/state")
 def state(rt: RuntimeDep, qpos: bool = False) -> dict[str, Any]:
+    """The robot's latest state (what the page's WebSocket pushes 20 times a second); `qpos=true` adds the whole
+    scene's joint positions."""
     return state_json(rt.worker.state(), include_qpos=qpos)
 
 
 @router.get("/events")
 def events(rt: RuntimeDep) -> list[dict[str, Any]]:
+    """The most recent events (e-stops, plans, steps, alarms, refusals), oldest first."""
     return [event_json(e) for e in rt.worker.recent_events()]
 
 

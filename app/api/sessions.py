@@ -54,6 +54,8 @@ def get_sessions(
     had_fall: bool | None = None,
     kind: Annotated[Literal["serve", "run", "import"] | None, Query()] = None,
 ) -> dict[str, Any]:
+    """Stored sessions, newest first, filtered and paged; `total` counts every match and `live_session_id`
+    is the one being recorded."""
     filters = SessionFilter(started_from=started_from, started_to=started_to, outcome=outcome, text=q or None,
                             had_estop=had_estop, had_fall=had_fall, kind=kind)  # fmt: skip
     with rt.db() as db:
@@ -64,6 +66,8 @@ def get_sessions(
 
 @router.get("/sessions/{session_id}")
 def get_session(session_id: int, rt: RuntimeDep) -> dict[str, Any]:
+    """One session: everything recorded but telemetry (commands, transcripts, plans, steps, events) and its
+    timeline; 404 when there is none."""
     with rt.db() as db:
         detail = session_detail(db, session_id)
     if detail is None:
@@ -195,6 +199,8 @@ def _replay_call(call: Any, *args: Any) -> dict[str, Any]:
 
 @router.get("/replay")
 def replay_status(rt: RuntimeDep) -> dict[str, Any]:
+    """What the replay's 3D view shows: the session, its time and span, playing or paused, the speed, and the
+    timeline entry in force."""
     return _replay(rt).status().as_dict()
 
 
@@ -206,14 +212,17 @@ def replay_load(body: ReplayIn, rt: RuntimeDep) -> dict[str, Any]:
 
 @router.post("/replay/seek")
 def replay_seek(body: SeekIn, rt: RuntimeDep) -> dict[str, Any]:
+    """Move the replay to `sim_time_s` of its session."""
     return _replay_call(_replay(rt).seek, body.sim_time_s)
 
 
 @router.post("/replay/play")
 def replay_play(rt: RuntimeDep, body: PlayIn | None = None) -> dict[str, Any]:
+    """Play the replay from where it is, at `speed` times real time (optional)."""
     return _replay_call(_replay(rt).play, body.speed if body else None)
 
 
 @router.post("/replay/pause")
 def replay_pause(rt: RuntimeDep) -> dict[str, Any]:
+    """Pause the replay where it is."""
     return _replay_call(_replay(rt).pause)
