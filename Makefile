@@ -1,4 +1,5 @@
-# Two commands on a fresh machine: `make run` (the app, simulated robot) and `make test` (the whole suite).
+# Two commands on a fresh machine: `make run` (the app, simulated robot) and `make test` (the whole suite and the
+# documentation site). `make docs` writes the generated reference pages again and builds the site into site/.
 # Each sets up what it needs: Debian packages (apt-get, when missing and root), .venv, the package.
 
 PYTHON ?= python3
@@ -7,11 +8,13 @@ BIN := $(VENV)/bin
 HOST ?= 127.0.0.1
 PORT ?= 8000
 export HOST PORT
+# (mkdocs-material's notice about its successor, printed at every build)
+export NO_MKDOCS_2_WARNING := 1
 
 RUN_DEBS := libgl1 libegl1 libportaudio2 espeak-ng
 TEST_DEBS := $(RUN_DEBS) chromium postgresql
 
-.PHONY: run test lint bench setup setup-test deps-run deps-test clean
+.PHONY: run test lint docs bench setup setup-test deps-run deps-test clean
 
 run: setup
 	$(BIN)/humanoid db upgrade
@@ -20,11 +23,17 @@ run: setup
 test: setup-test
 	$(BIN)/ruff check app robot tests
 	$(BIN)/ruff format --check app robot tests
+	$(BIN)/python scripts/docs_reference.py --check
+	$(BIN)/mkdocs build --strict -q -d site
 	$(BIN)/python -m pytest -q
 
 lint: setup-test
 	$(BIN)/ruff check app robot tests
 	$(BIN)/ruff format --check app robot tests
+
+docs: setup-test
+	$(BIN)/python scripts/docs_reference.py
+	$(BIN)/mkdocs build --strict -d site
 
 bench: setup-test
 	$(BIN)/humanoid bench core --output bench-results/core.json --json
@@ -50,4 +59,4 @@ $(VENV)/.installed-test: $(VENV)/bin/python pyproject.toml
 	touch $(VENV)/.installed-run $@
 
 clean:
-	rm -rf $(VENV) data .pytest_cache .ruff_cache *.egg-info
+	rm -rf $(VENV) data site .pytest_cache .ruff_cache *.egg-info
