@@ -2,7 +2,7 @@
 
 Why a token and not the login cookie: the 3D views are cross-site frames (so that their software WebGL renders in
 a process of its own and never delays the e-stop), and a browser does not send a SameSite=Strict cookie to a
-cross-site frame. The page asks for a token (`GET /api/scene/token`, which needs the login) and puts it in the
+cross-site frame. The page asks for a token (`GET /api/scene`, which needs the login) and puts it in the
 frame's address; the 3D views' gate checks it on every request and WebSocket. A token says who it was issued to
 and is bound to the login it came from: it stops working when that login ends (log out, or its 12 h are up).
 """
