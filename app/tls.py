@@ -24,6 +24,20 @@ from cryptography.x509.oid import NameOID
 
 CA_YEARS = 10
 SERVER_DAYS = 397  # browsers refuse server certificates valid for longer
+# What the robot's CA may vouch for, and nothing else (a browser that trusts it trusts only these): this machine's
+# names, any `.local` name, and the private, link-local and loopback address ranges (plus the public addresses
+# the machine has when the CA is made). A stolen `ca-key.pem` cannot then impersonate another site.
+LOCAL_NETWORKS = (
+    "10.0.0.0/8",
+    "172.16.0.0/12",
+    "192.168.0.0/16",
+    "100.64.0.0/10",
+    "169.254.0.0/16",
+    "127.0.0.0/8",
+    "::1/128",
+    "fc00::/7",
+    "fe80::/10",
+)
 
 
 @dataclass(frozen=True)
@@ -63,9 +77,15 @@ def ensure_certificate(directory: Path, host: str) -> TlsFiles:
     directory.mkdir(parents=True, exist_ok=True)
     ca_cert_path, ca_key_path = directory / "ca.pem", directory / "ca-key.pem"
     cert_path, key_path = directory / "server.pem", directory / "server-key.pem"
-    if not ca_cert_path.exists() or not ca_key_path.exists():
-        _write_ca(ca_cert_path, ca_key_path)
     names, addresses = server_names(host)
+    if not ca_cert_path.exists() or not ca_key_path.exists():
+        _write_ca(ca_cert_path, ca_key_path, names, addresses)
+    names, addresses, outside = _within_ca(ca_cert_path, names, addresses)
+    if outside:
+        print(
+            f"not in the robot's certificate (its CA may not vouch for them): {', '.join(outside)}; to add "
+            f"them, delete {ca_cert_path.parent}/ca*.pem and import the new ca.pem in the browsers again"
+        )
     if not _covers(cert_path, names, addresses):
         _write_server(cert_path, key_path, ca_cert_path, ca_key_path, names, addresses)
     return TlsFiles(str(cert_path), str(key_path))
@@ -81,7 +101,33 @@ def _private_write(path: Path, data: bytes) -> None:
     path.write_bytes(data)
 
 
-def _write_ca(cert_path: Path, key_path: Path) -> None:
+def _permitted(names: list[str], addresses: list[str]) -> x509.NameConstraints:
+    networks = {ipaddress.ip_network(n) for n in LOCAL_NETWORKS}
+    networks |= {ipaddress.ip_network(a) for a in addresses if not any(ipaddress.ip_address(a) in n for n in networks)}
+    dns = sorted({*names, "local"})
+    return x509.NameConstraints(
+        permitted_subtrees=[x509.DNSName(n) for n in dns] + [x509.IPAddress(n) for n in sorted(networks, key=str)],
+        excluded_subtrees=None,
+    )
+
+
+def _within_ca(ca_cert_path: Path, names: list[str], addresses: list[str]) -> tuple[list[str], list[str], list[str]]:
+    """The names and addresses the CA may vouch for, and the ones it may not."""
+    ca = x509.load_pem_x509_certificate(ca_cert_path.read_bytes())
+    try:
+        constraints = ca.extensions.get_extension_for_class(x509.NameConstraints).value
+    except x509.ExtensionNotFound:
+        return names, addresses, []
+    subtrees = constraints.permitted_subtrees or []
+    dns = [t.value for t in subtrees if isinstance(t, x509.DNSName)]
+    networks = [t.value for t in subtrees if isinstance(t, x509.IPAddress)]
+    ok_names = [n for n in names if any(n == d or n.endswith("." + d) for d in dns)]
+    ok_addresses = [a for a in addresses if any(ipaddress.ip_address(a) in net for net in networks)]
+    outside = [n for n in names if n not in ok_names] + [a for a in addresses if a not in ok_addresses]
+    return ok_names, ok_addresses, outside
+
+
+def _write_ca(cert_path: Path, key_path: Path, names: list[str], addresses: list[str]) -> None:
     key = ec.generate_private_key(ec.SECP256R1())
     name = x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, f"humanoid mission control CA ({socket.gethostname()})")])
     cert = (
@@ -108,6 +154,7 @@ def _write_ca(cert_path: Path, key_path: Path) -> None:
             critical=True,
         )
         .add_extension(x509.SubjectKeyIdentifier.from_public_key(key.public_key()), critical=False)
+        .add_extension(_permitted(names, addresses), critical=True)
         .sign(key, hashes.SHA256())
     )
     _private_write(
