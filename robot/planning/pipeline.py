@@ -9,7 +9,7 @@ from typing import Literal
 
 from robot.interface import Plan
 from robot.planning.context import PlanningContext
-from robot.planning.planner import Planner, PlanningError
+from robot.planning.planner import ClarificationNeeded, Planner, PlanningError
 from robot.planning.rules import RulesPlanner
 from robot.planning.validator import validate_plan
 
@@ -84,6 +84,8 @@ class PlanningPipeline:
             raise PlanningError("; ".join(notes))
         try:
             plan = self._checked(self.fallback, text, context)
+        except ClarificationNeeded:
+            raise  # a question for the operator, not a failure to explain
         except PlanningError as exc:
             raise PlanningError("; ".join([*notes, f"{self.fallback.name} fallback: {exc}"])) from exc
         notes.append(f"planned by {self.fallback.name} instead")
