@@ -12,6 +12,7 @@ from __future__ import annotations
 import re
 from collections.abc import Iterable
 from dataclasses import dataclass
+from functools import lru_cache
 
 from rapidfuzz import fuzz
 
@@ -56,8 +57,10 @@ class WorldNames:
     def __init__(self, world: WorldContext) -> None:
         self.world = world
         self._room_of_word = {w: room for room, words in ROOM_WORDS.items() for w in words}
-        self._object_names = self._object_surfaces()
-        self._place_names = self._place_surfaces()
+        self._object_names = _object_table(
+            tuple((o, a, world.object_colors.get(o), world.object_shapes.get(o)) for o, a in world.objects.items())
+        )
+        self._place_names = _place_table(tuple((p, a, world.place_rooms.get(p)) for p, a in world.places.items()))
 
     # --- objects ---------------------------------------------------------------------------------------------
 
@@ -76,15 +79,15 @@ class WorldNames:
     def _object_name(self, words: str, phrase: str) -> str:
         exact = self._object_names.get(words)
         if exact:
-            return self._one(exact, "object")
+            return _one(exact)
         if words in DRINK_WORDS:
-            return self._one(self._objects_where(lambda o: self._shape(o) in DRINK_SHAPES), "object")
+            return _one(self._objects_where(lambda o: self._shape(o) in DRINK_SHAPES))
         described = self._described_object(words)
         if described is not None:
             return described
         near = _near_miss(words, self._object_names)
         if near is not None:
-            return self._one(near, "object")
+            return _one(near)
         raise PlanningError(f"unknown object {_quoted(phrase)}; known objects: {self.known_objects()}")
 
     def _described_object(self, words: str) -> str | None:
@@ -99,7 +102,7 @@ class WorldNames:
         by_shape = self._objects_where(lambda o: self._shape(o) == shape) if shape else by_colour
         both = [o for o in by_shape if o in by_colour]
         if both:
-            return self._one(both, "object")
+            return _one(both)
         if by_colour and by_shape:
             raise _question(by_shape + by_colour)
         known = self.known_objects()
@@ -128,13 +131,13 @@ class WorldNames:
             return self._place_in_room(words, room, phrase)
         exact = self._place_names.get(words)
         if exact:
-            return self._one(exact, "place")
+            return _one(exact)
         described = self._described_place(words, phrase)
         if described is not None:
             return described
         near = _near_miss(words, self._place_names)
         if near is not None:
-            return self._one(near, "place")
+            return _one(near)
         raise PlanningError(f"unknown place {_quoted(phrase)}; known places: {self.known_places()}")
 
     def _described_place(self, words: str, phrase: str) -> str | None:
@@ -157,7 +160,7 @@ class WorldNames:
                 raise PlanningError(f"unknown place {_quoted(phrase)}; known places: {self.known_places()}")
         both = [p for p in fitting if p in in_room]
         if both:
-            return self._one(both, "place")
+            return _one(both)
         if fitting and in_room:
             raise _question([*fitting, *in_room])
         raise PlanningError(f"there is no {noun} in the {room}; known places: {self.known_places()}")
@@ -191,36 +194,38 @@ class WorldNames:
             raise PlanningError(f"I don't know where the {reference.name} is; say where to look, or ask me to find it")
         return where
 
-    # --- tables of names -------------------------------------------------------------------------------------
 
-    def _object_surfaces(self) -> dict[str, list[str]]:
-        table: dict[str, list[str]] = {}
-        for name, aliases in self.world.objects.items():
-            colour, shape = self.world.object_colors.get(name), self._shape(name)
-            kind_words = OBJECT_WORDS.get(shape or "", ())
-            said = [name, *aliases, *kind_words]
-            if colour:
-                said += [f"{colour} {w}" for w in (*kind_words, *GENERIC_NOUNS)]
-            _add(table, said, name)
-        return table
+# --- tables of names: built once per world, not per command --------------------------------------------------
 
-    def _place_surfaces(self) -> dict[str, list[str]]:
-        table: dict[str, list[str]] = {}
-        for name, aliases in self.world.places.items():
-            kind_words = PLACE_WORDS.get(normalize(name).split()[-1], ())
-            room = self.world.place_rooms.get(name)
-            room_words = ROOM_WORDS.get(room or "", ())
-            said = [name, *aliases, *kind_words, *(f"{r} {w}" for r in room_words for w in kind_words)]
-            if room is not None and normalize(room) in (normalize(a) for a in aliases):
-                said += room_words  # the world calls the place by its room: so do the room's other names
-            _add(table, said, name)
-        return table
+ObjectSignature = tuple[tuple[str, tuple[str, ...], str | None, str | None], ...]  # name, aliases, colour, shape
+PlaceSignature = tuple[tuple[str, tuple[str, ...], str | None], ...]  # name, aliases, room
 
-    def _one(self, names: Iterable[str], what: str) -> str:
-        unique = list(dict.fromkeys(names))
-        if len(unique) == 1:
-            return unique[0]
-        raise _question(unique)
+
+@lru_cache(maxsize=16)
+def _object_table(objects: ObjectSignature) -> dict[str, list[str]]:
+    """Every way to call each object -> the objects so called."""
+    table: dict[str, list[str]] = {}
+    for name, aliases, colour, shape in objects:
+        kind_words = OBJECT_WORDS.get(shape or "", ())
+        said = [name, *aliases, *kind_words]
+        if colour:
+            said += [f"{colour} {w}" for w in (*kind_words, *GENERIC_NOUNS)]
+        _add(table, said, name)
+    return table
+
+
+@lru_cache(maxsize=16)
+def _place_table(places: PlaceSignature) -> dict[str, list[str]]:
+    """Every way to call each place (its kind's everyday words, with or without its room) -> the places."""
+    table: dict[str, list[str]] = {}
+    for name, aliases, room in places:
+        kind_words = PLACE_WORDS.get(normalize(name).split()[-1], ())
+        room_words = ROOM_WORDS.get(room or "", ())
+        said = [name, *aliases, *kind_words, *(f"{r} {w}" for r in room_words for w in kind_words)]
+        if room is not None and normalize(room) in (normalize(a) for a in aliases):
+            said += room_words  # the world calls the place by its room: so do the room's other names
+        _add(table, said, name)
+    return table
 
 
 def _add(table: dict[str, list[str]], said: Iterable[str], name: str) -> None:
@@ -228,6 +233,14 @@ def _add(table: dict[str, list[str]], said: Iterable[str], name: str) -> None:
         names = table.setdefault(normalize(surface), [])
         if name not in names:
             names.append(name)
+
+
+def _one(names: Iterable[str]) -> str:
+    """The one thing these names come to, or a question when they are several."""
+    unique = list(dict.fromkeys(names))
+    if len(unique) == 1:
+        return unique[0]
+    raise _question(unique)
 
 
 def _clean(phrase: str) -> str:
