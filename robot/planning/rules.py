@@ -12,6 +12,7 @@ make it ask one question (`ClarificationNeeded`), never guess.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 from robot.interface import Plan, Step
@@ -19,10 +20,10 @@ from robot.navigation.goal import parse_pose_goal
 from robot.planning.context import PlanningContext
 from robot.planning.language.clauses import split_command
 from robot.planning.language.intents import Step as Request
-from robot.planning.language.intents import read_step
+from robot.planning.language.intents import elliptic_step, read_step
 from robot.planning.language.lexicon import NUMBER_WORDS, OBJECT_PRONOUNS, PLACE_PRONOUNS
 from robot.planning.language.names import WorldNames
-from robot.planning.planner import PlanningError
+from robot.planning.planner import ClarificationNeeded, PlanningError
 
 __all__ = ["EXAMPLES", "NUMBER_WORDS", "RulesPlanner"]
 
@@ -68,21 +69,33 @@ def _read(raw: str) -> list[Request]:
     ("say hello, world") or names a thing for a pronoun after it ("the red mug, bring it to the table")."""
     requests: list[Request] = []
     for whole in split_command(raw):
-        clause = whole.without_prefixes()
-        if not clause.without_suffixes().words:
-            continue  # "thanks", "robot": nothing asked
         previous = requests[-1] if requests else None
         if previous is not None and previous.open_message:  # "announce: dinner is ready"
             start = whole.words[0].start
             requests[-1] = Request("say", text=raw[start : whole.words[-1].end], text_start=start)
             continue
+        clause = whole.without_prefixes()
+        if not clause.without_suffixes().words:
+            continue  # "thanks", "robot": nothing asked
         request = read_step(clause)
+        if request is None and previous is not None:
+            request = elliptic_step(clause.without_suffixes(), previous)
         if request is None and previous is not None and previous.action == "say":  # "say hello, world"
             start = previous.text_start
             requests[-1] = Request("say", text=raw[start : whole.words[-1].end], text_start=start)
             continue
-        requests.append(request or Request("topic", thing=clause.without_suffixes().text))
+        if request is None:
+            text = clause.without_suffixes().text
+            request = Request("chatter" if _STATEMENT.match(text) else "topic", thing=text)
+        requests.append(request)
     return requests
+
+
+# "I'm thirsty, ...", "it's late, ...": said about things, not asked of the robot
+_STATEMENT = re.compile(
+    r"(?:i|we|it|this|that|there|he|she|they) (?:am|are|is|was|were|think|feel|guess|have|had|got|will|would|"
+    r"just|really|do not|did not|cannot|can not)\b"
+)
 
 
 @dataclass
@@ -107,6 +120,9 @@ class _Composer:
         self.last_place: str | None = None
 
     def compose(self, requests: list[Request]) -> Plan:
+        requests = [r for r in requests if r.action not in ("nothing", "chatter")]
+        if len(requests) == 1 and requests[0].action == "topic" and self._names_an_object(requests[0].thing):
+            requests = [Request("fetch", thing=requests[0].thing, to_me=True)]  # "the red mug, please"
         parts: list[_Said] = []
         for i, request in enumerate(requests):
             if request.action == "stop" and i > 0:
@@ -183,8 +199,8 @@ class _Composer:
         return name, source
 
     def _place(self, phrase: str) -> str:
-        if phrase.strip() in PLACE_PRONOUNS and self.last_place is not None:
-            return self.last_place
+        if phrase.strip() in (*PLACE_PRONOUNS, *OBJECT_PRONOUNS) and self.last_place is not None:
+            return self.last_place  # "the table: put the apple on it"
         place = self.names.place(phrase)
         self.last_place = place
         return place
@@ -198,6 +214,15 @@ class _Composer:
         target = self.names.target(phrase)
         self.last_place = target
         return target
+
+    def _names_an_object(self, phrase: str | None) -> bool:
+        try:
+            self.names.object(phrase or "")
+        except ClarificationNeeded:
+            return True  # it names things: the question will be asked
+        except PlanningError:
+            return False
+        return True
 
     def _topic(self, phrase: str) -> None:
         """A thing named on its own before the request about it ("the red mug, bring it to the table")."""

@@ -86,13 +86,13 @@ def test_a_pose_keeps_its_commas_and_minus_signs_and_a_dash_between_words_ends_a
     ],
 )
 def test_a_command_is_cut_into_its_steps_in_the_order_they_are_done(text: str, steps: list[str]) -> None:
-    assert [c.text for c in split_command(text)] == steps
+    assert [c.without_prefixes().text for c in split_command(text)] == steps
 
 
 def test_politeness_is_cut_from_both_ends_of_a_step() -> None:
-    request, thanks = split_command("Hey robot, would you be so kind as to fetch the cup for me, thanks!")
+    hey, request, thanks = split_command("Hey robot, would you be so kind as to fetch the cup for me, thanks!")
     assert request.without_prefixes().without_suffixes().text == "fetch the cup"
-    assert thanks.without_suffixes().text == ""  # nothing asked: no step
+    assert hey.without_prefixes().text == thanks.without_suffixes().text == ""  # nothing asked: no step
 
 
 # --- names ---------------------------------------------------------------------------------------------------

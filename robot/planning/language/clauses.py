@@ -13,6 +13,7 @@ from functools import cache
 
 from robot.planning.language.lexicon import (
     CLAUSE_VERBS,
+    FILLER_INFIXES,
     FILLER_PREFIXES,
     FILLER_SUFFIXES,
     SEQUENCE_WORDS,
@@ -52,6 +53,15 @@ class Clause:
         """Without the politeness it ends with ("thanks", "for me", "right now")."""
         return self._cut(_suffix_pattern(), at_start=False)
 
+    def without_infixes(self) -> Clause:
+        """Without the politeness said inside it ("bring the mug for me to the table")."""
+        words = list(self.words)
+        text = " ".join(t.text for t in words)
+        for match in reversed(list(_infix_pattern().finditer(text))):
+            first = text[: match.start()].count(" ")
+            del words[first : first + len(match.group().split())]
+        return Clause(tuple(words), self.raw)
+
     def _cut(self, pattern: re.Pattern[str], at_start: bool) -> Clause:
         words = list(self.words)
         while words:
@@ -69,7 +79,7 @@ def split_command(raw: str) -> list[Clause]:
     ordered: list[Clause] = []
     deferred: list[Clause] = []  # "before you go to the dock, look around": goes after the step that follows
     for segment in _segments(tokenize(raw), raw):
-        for piece, order in _pieces(segment.without_prefixes()):
+        for piece, order in _pieces(segment):
             if order == "after next":
                 deferred.append(piece)
                 continue
@@ -108,12 +118,13 @@ def _pieces(segment: Clause) -> list[tuple[Clause, str]]:
     goes: "now" (in the order said), "before previous" or "after next"."""
     words = segment.words
     pieces: list[tuple[Clause, str]] = []
-    start = i = 0
+    # politeness is not cut here, but no step starts inside it ("do me a favour and put ...")
+    start = i = len(words) - len(segment.without_prefixes().words)
     order = "now"
     while i < len(words):
         rest = " ".join(t.text for t in words[i:])
         found = (_lead() if i == start else _joint()).match(rest)
-        if found and _starts_a_step(rest[found.end() :].strip()):
+        if found and _step_follows(found, rest[found.end() :].strip()):
             kind = found.group("kind") or ""
             if i == start:
                 order = _LEAD_ORDER.get(kind, order)
@@ -125,6 +136,12 @@ def _pieces(segment: Clause) -> list[tuple[Clause, str]]:
         i += 1
     if start < len(words):
         pieces.append((Clause(words[start:], segment.raw), order))
+    polite = words[: len(words) - len(segment.without_prefixes().words)]
+    if not pieces:
+        return [(segment, order)] if polite else []  # nothing but politeness: the reader skips it
+    if polite:  # give the first piece back its politeness
+        first, order = pieces[0]
+        pieces[0] = (Clause((*polite, *first.words), segment.raw), order)
     return pieces
 
 
@@ -145,16 +162,31 @@ def _lead() -> re.Pattern[str]:
 @cache
 def _step_start() -> re.Pattern[str]:
     fillers = phrases(tuple(p for p in FILLER_PREFIXES if p not in ("and", "then", "first", "next", "so", "now")))
-    return re.compile(rf"(?:{verbs(*CLAUSE_VERBS)}|{fillers})\b")
+    return re.compile(rf"(?:{verbs(*CLAUSE_VERBS)}|{fillers}|when|once|after|before)\b")
 
 
 def _starts_a_step(text: str) -> bool:
     return bool(text) and _step_start().match(text) is not None
 
 
+def _step_follows(joint: re.Match[str], rest: str) -> bool:
+    """Whether a step starts after these joining words. After "then" or "after that" one always does, even
+    without its verb ("go to the table, then the dock"); after "and" or "after" only with one ("salt and
+    pepper", "see you after lunch")."""
+    if joint.group().split()[-1] in ("then", "afterwards", "finally", "lastly") or joint.group() == "after that":
+        return bool(rest)
+    return _starts_a_step(rest)
+
+
 @cache
 def _prefix_pattern() -> re.Pattern[str]:
-    return re.compile(rf"^{phrases(FILLER_PREFIXES)}(?: |$)")
+    # "let's go" is "go", but "let us know that ..." is a message
+    return re.compile(rf"^(?:{phrases(tuple(p for p in FILLER_PREFIXES if p != 'let us'))}|let us(?! know))(?: |$)")
+
+
+@cache
+def _infix_pattern() -> re.Pattern[str]:
+    return re.compile(rf"(?<= ){phrases(FILLER_INFIXES)}(?= )")
 
 
 @cache

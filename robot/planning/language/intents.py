@@ -12,6 +12,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache
 
+from robot.navigation.goal import parse_pose_goal
 from robot.planning.language.clauses import Clause
 from robot.planning.language.lexicon import (
     CARRY_VERBS,
@@ -24,7 +25,9 @@ from robot.planning.language.lexicon import (
     SAY_VERBS,
     TELL_VERBS,
     WAIT_VERBS,
+    phrases,
     verbs,
+    word_list,
 )
 from robot.planning.planner import PlanningError
 
@@ -54,7 +57,7 @@ def read_step(clause: Clause) -> Step | None:
     said = _said(clause)
     if said is not None:
         return said
-    clause = clause.without_suffixes()
+    clause = clause.without_suffixes().without_infixes()
     text = clause.text
     for pattern, build in _shapes():
         match = pattern.fullmatch(text)
@@ -73,10 +76,10 @@ _AUDIENCE = (
 
 @cache
 def _say_shapes() -> tuple[re.Pattern[str], ...]:
-    loud = r"(?: (?:out loud|aloud|loudly|clearly|loud))?"
+    loud = r"(?: (?:out loud|aloud|loudly|clearly|loud|out))?"
     return (
         re.compile(
-            rf"{verbs(*SAY_VERBS)}{loud}(?: to (?P<aud>{_AUDIENCE}))?(?: (?:that|the following))?"
+            rf"(?:{verbs(*SAY_VERBS)}|call out){loud}(?: to (?P<aud>{_AUDIENCE}))?(?: (?:that|the following))?"
             rf"(?: (?P<msg>.+))?"
         ),
         re.compile(rf"{verbs(*TELL_VERBS)} (?P<aud>{_AUDIENCE})(?: that)?(?: (?P<msg>.+))?"),
@@ -118,39 +121,58 @@ def _said(clause: Clause) -> Step | None:
 
 _STOP = (
     r"(?:stop|halt|freeze|stand still|stop moving|cancel|abort|emergency stop|e stop|stop what you are doing|"
-    r"hold it|do not move|cancel that|stop that|cancel everything|stop everything|stop the robot|stop all)"
+    r"hold it|do not move|cancel that|stop that|cancel everything|stop everything|stop the robot|stop all|"
+    r"never mind|forget it|forget about it)"
     r"(?: (?:stop|halt|freeze|now|right now|immediately|please|at once|robot|right there|there|everything|"
     r"moving|it|all))*"
 )
+_AROUND = r"(?: (?:around you|around|here|in the room|right now|in front of you|near you|nearby|over there|there))?"
 _LOOK_AND_TELL = (
-    r"(?:what|which objects|what things) (?:do|can) you (?:see|spot|make out)(?: around you| around| here| in "
-    r"the room| right now)?|what are you seeing(?: right now)?|what is (?:around|near)(?: you| here)?|"
-    r"(?:describe|tell me about|report) (?:the scene|what you (?:can )?see|your surroundings|what is around "
-    r"you|what you are seeing)|tell me what you (?:can )?(?:see|spot)(?: around you)?|what have you seen|"
-    r"what can you spot(?: around you)?"
+    r"(?:(?:tell me|let me know|say|describe|report|can you tell me|tell me about) )?"
+    r"(?:(?:what|which objects|what things) (?:do|can) you (?:see|spot|make out)|what you (?:can )?(?:see|spot)|"
+    rf"what are you seeing|what is (?:around|near|in front of|close to)(?: you| here)?|what have you seen|"
+    rf"what can you spot|the scene|your surroundings|what you are seeing|what is there){_AROUND}"
 )
 _HOME = (
     r"(?:(?:go|come|head|walk|return|get|run|move|drive)(?: on)?(?: back)?(?: to)? (?:home|your home|your start|"
     r"where you started|where you began|the start|the starting point|your starting (?:point|position|spot|place)|"
-    r"your start position|base|the beginning)|home|back home|go home)"
+    r"your start position|base|the beginning|where you came from|where you started from|where you began|start|"
+    r"your starting point again)|home|back home|go home)"
+)
+_ROOMS = phrases(
+    (
+        "the room",
+        "the area",
+        "the place",
+        "here",
+        "you",
+        *(f"the {w}" for w in word_list("kitchen, living room, lounge, sitting room, house, apartment, flat")),
+    )
 )
 _LOOK = (
-    r"(?:(?:have|take) a )?(?:look|glance|peek)(?: (?:around|round|about))(?: you| the room| here)?|"
-    r"scan (?:the room|around|your surroundings|the area)|check (?:your|the) surroundings|"
-    r"survey (?:the room|your surroundings)|have a look round"
+    rf"(?:(?:have|take) a )?(?:look|glance|peek)(?: (?:around|round|about))(?: {_ROOMS})?|"
+    rf"scan (?:around|your surroundings|{_ROOMS})|check (?:your|the) surroundings|"
+    rf"survey (?:your surroundings|{_ROOMS})|have a look round"
 )
 _CHARGE = (
     r"(?:go |go and |go to |come )?(?:re)?charge(?: yourself| up| your batter(?:y|ies)| itself)?|"
     r"(?:go )?dock(?: yourself)?|go (?:re)?charge"
 )
-_SOURCE = r"(?:from|off of|off|out of|on|at|in|up from|up off)"
-_AWAY = r"(?:back|over|down|off|up|away|across)"
-_ONTO = (
-    r"(?:to|onto|on|into|in|at|over to|on to|back to|down on|down at|off at|on top of|next to|by|near|beside|"
-    r"inside|up on|over on|down to|across to|in to)"
+# the little words between a verb and a place, longest first ("on top of" before "on")
+_SOURCE = phrases(word_list("from, off of, off, out of, on, at, in, up from, up off, on top of"))
+_AWAY = phrases(word_list("back, over, down, off, up, away, across"))
+_ONTO = phrases(
+    word_list("""to, onto, on, into, in, at, over to, on to, back to, down on, down at, off at,
+                             on top of, next to, by, near, beside, inside, up on, over on, down to, across to,
+                             in to, down onto, back on""")
 )
-_HERE = r"(?:(?:over |back )?(?:here|to me|to us|over to me|back to me)|this way|my way|over)"
-_GO_TO = r"(?:to|towards|toward|into|in to|over to|up to|down to|round to|across to|onto|on to)"
+_HERE = phrases(
+    word_list("""here, to me, to us, over to me, back to me, over here, back here, this way, my way,
+                             over""")
+)
+_GO_TO = phrases(
+    word_list("to, towards, toward, into, in to, over to, up to, down to, round to, across to, onto, on to")
+)
 
 
 def _thing(m: re.Match[str], clause: Clause, action: str, **kw: object) -> Step:
@@ -159,20 +181,22 @@ def _thing(m: re.Match[str], clause: Clause, action: str, **kw: object) -> Step:
 
 
 def _go(m: re.Match[str], clause: Clause) -> Step:
-    return Step("go", place=clause.raw_of(m.start("place"), m.end("place")))
+    """A walk to a place named in words, or to a pose ("1.2, 0.5, 90 deg": its punctuation is kept)."""
+    raw = clause.raw_of(m.start("place"), m.end("place"))
+    return Step("go", place=raw if parse_pose_goal(raw) is not None else m.group("place"))
 
 
 def _carry(m: re.Match[str], clause: Clause) -> Step:
     if re.fullmatch(r"(?:me|us|you|here|me here|the person|whoever asked)", m.group("place")):
         return _thing(m, clause, "fetch", to_me=True)
-    return Step("carry", thing=m.group("thing"), source=m.group("source"), place=m.group("place"))
+    return Step("carry", thing=m.group("thing"), source=m.groupdict().get("source"), place=m.group("place"))
 
 
 def _wait(m: re.Match[str], clause: Clause) -> Step:
     amount = _number(m.group("n"))
     if amount is None:
         raise PlanningError(f"how long is {m.group('n')!r}? say a number of seconds, e.g. 'wait 5 seconds'")
-    per_unit = 60.0 if m.group("unit").startswith("min") else 1.0
+    per_unit = 60.0 if (m.group("unit") or "").startswith("min") else 1.0
     return Step("wait", seconds=amount * per_unit)
 
 
@@ -186,14 +210,22 @@ def _shapes() -> tuple[tuple[re.Pattern[str], Build], ...]:
         rf"(?:{verbs(*WAIT_VERBS)}|hold on|hang on|hold|hang tight|sit tight|stay|stay still|stay put|"
         r"stand still|stand by|hold still|stand there|stand)"
     )
+    find = lambda m, c: _thing(m, c, "find")  # noqa: E731
+    to_me = lambda m, c: _thing(m, c, "fetch", to_me=True)  # noqa: E731
     shapes: list[tuple[str, Build]] = [
         (_STOP, lambda m, c: Step("stop")),
+        # "and tell me when you're done": the plan's last step says so anyway
+        (
+            r"(?:tell|let) (?:me|us)(?: know)? (?:when|once) (?:you are|you have|it is|that is) (?:done|finished|"
+            r"there|ready)",
+            lambda m, c: Step("nothing"),
+        ),
         (_LOOK_AND_TELL, lambda m, c: Step("look_and_tell")),
         (_HOME, lambda m, c: Step("home")),
         (_LOOK, lambda m, c: Step("look")),
         (
             rf"{wait_verbs}(?: (?:there|here|still|put))?(?: for)?(?: (?:about|around|roughly|just|another))? "
-            r"(?P<n>[\w.]+(?: \w+){0,2}?) ?(?P<unit>seconds?|secs?|s|minutes?|mins?)",
+            rf"(?P<n>{_NUMBER})(?: ?(?P<unit>seconds?|secs?|s|minutes?|mins?))?",
             _wait,
         ),
         (_CHARGE, lambda m, c: Step("go", place="charger")),
@@ -209,46 +241,64 @@ def _shapes() -> tuple[tuple[re.Pattern[str], Build], ...]:
             rf"(?: over)? {_GO_TO} (?P<place>.+)",
             _go,
         ),
+        (rf"(?:{verbs(*GO_VERBS)})(?: {_AWAY})? (?P<place>there|over there)", _go),
+        # "go stand by the charger", "wait at the table"
+        (
+            r"(?:go (?:and )?)?(?:stand|wait|stay|park yourself|position yourself) (?:by|at|next to|near|beside|"
+            r"in front of) (?P<place>.+)",
+            _go,
+        ),
         # find
         (
-            rf"{go_first}(?:{verbs(*FIND_VERBS)}(?: out)?|{verbs('look')} (?:around |about |everywhere )?for|"
-            rf"{verbs('search')}(?: (?:the room|the house|around|everywhere|the area|the place))? for|"
+            rf"{go_first}(?:{verbs(*FIND_VERBS)}(?: out| me| us)?|{verbs('look')} (?:around |about |everywhere )?for|"
+            rf"{verbs('search', 'check')}(?: (?:around|everywhere|{_ROOMS}))? for|"
             rf"{verbs('hunt')}(?: around)? for|(?:have|take) a look(?: around)? for|check for|see if you can "
             r"(?:find|spot|see)|try to find|see|spot) (?P<thing>.+?)(?: (?:anywhere|around|here|in the room|"
             r"around here|nearby))?",
-            lambda m, c: _thing(m, c, "find"),
+            find,
+        ),
+        (
+            r"where (?:did|has|have|does) (?P<thing>.+?) (?:go|gone|went|get to|got to|end up|ended up|disappear to)",
+            find,
         ),
         (
             r"(?:where is|where are|where|where did you put|where can i find) (?P<thing>.+?)"
             r"(?: (?:now|at the moment|right now|gone|go|at))?",
-            lambda m, c: _thing(m, c, "find"),
+            find,
         ),
         (
             r"(?:check|tell me|show me|find out|do you know|can you tell me|let me know|see|say) where (?P<thing>.+?)"
-            r" (?:is|are|went|has gone|is now)",
-            lambda m, c: _thing(m, c, "find"),
+            r" (?:is|are|went|has gone)(?: now| located| kept| at the moment| right now)?",
+            find,
         ),
+        (r"(?:is|are) (?P<thing>.+?) (?:anywhere(?: around| here| nearby)?|around(?: here)?|nearby|here)", find),
         (
             r"(?:can you see|do you see|is there|are there|have you seen|did you see) (?P<thing>.+?)"
             r"(?: (?:anywhere|around|here|around here))?",
-            lambda m, c: _thing(m, c, "find"),
+            find,
         ),
         # handed over: "bring me the cup", "bring it here", "I'd like the apple"
         (
             rf"{go_first}{verbs(*HAND_VERBS)} (?:me|us)(?: over)? (?P<thing>.+?)(?: {_SOURCE} (?P<source>.+?))?"
             rf"(?: {_HERE})?",
-            lambda m, c: _thing(m, c, "fetch", to_me=True),
+            to_me,
         ),
         (
-            rf"{go_first}{verbs('bring', 'fetch', 'get', 'carry', 'take', 'grab')} (?P<thing>.+?)"
-            rf"(?: {_SOURCE} (?P<source>.+?))? {_HERE}",
-            lambda m, c: _thing(m, c, "fetch", to_me=True),
+            rf"{go_first}{verbs('bring', 'fetch', 'get', 'carry', 'take', 'grab', 'give', 'hand', 'pass')} "
+            rf"(?P<thing>.+?)(?: {_SOURCE} (?P<source>.+?))? {_HERE}",
+            to_me,
+        ),
+        # "I want the apple on the table": put there; "I'd like the apple": handed over
+        (
+            r"(?:i want|i need|i would like) (?P<thing>.+?) (?:put |placed |moved |taken |brought )?"
+            r"(?:on|onto|to|at|in|on top of) (?P<place>.+)",
+            _carry,
         ),
         (
             r"(?:i want|i need|i would like|i would love|can i have|may i have|can i get|could i have|could i get|"
             r"i will have|i will take|give me|i want to have|i would like to have|can i please have|could i please "
             rf"have) (?P<thing>.+?)(?: {_SOURCE} (?P<source>.+?))?",
-            lambda m, c: _thing(m, c, "fetch", to_me=True),
+            to_me,
         ),
         # carry somewhere
         (
@@ -256,13 +306,42 @@ def _shapes() -> tuple[tuple[re.Pattern[str], Build], ...]:
             rf"(?: {_AWAY})? {_ONTO} (?P<place>.+)",
             _carry,
         ),
+        (
+            rf"{go_first}{verbs(*CARRY_VERBS)} (?P<thing>.+?)(?: {_AWAY})?(?: {_ONTO})? (?P<place>there|over there)",
+            _carry,
+        ),
+        # "bring the mug", "bring over the bottle": to the person who asked
+        (
+            rf"{go_first}{verbs('bring', 'fetch', 'pass', 'hand')}(?: over| back| along| round)? (?P<thing>.+?)"
+            rf"(?: {_SOURCE} (?P<source>.+?))?",
+            to_me,
+        ),
         # pick up
         (
-            rf"{go_first}{verbs(*PICK_VERBS)}(?: up)? (?P<thing>.+?)(?: up)?(?: {_SOURCE} (?P<source>.+?))?(?: up)?",
+            rf"{go_first}{verbs(*PICK_VERBS)}(?: up)? (?P<thing>.+?)(?: up| down| out)?(?: {_SOURCE} (?P<source>.+?))?"
+            r"(?: up)?",
             lambda m, c: _thing(m, c, "fetch"),
         ),
+        # last, "go kitchen": a recognition error dropped the small word; only verbs that always mean walking
+        (rf"{verbs('go', 'walk', 'head', 'navigate', 'drive', 'travel', 'proceed')} (?P<place>.+)", _go),
     ]
     return tuple((re.compile(pattern), build) for pattern, build in shapes)
+
+
+def elliptic_step(clause: Clause, previous: Step) -> Step | None:
+    """A step said without its verb, after one with it: "go to the table, then the dock", "find the apple, then
+    the mug"."""
+    if previous.action == "go":
+        place = re.match(rf"(?:(?:over |back )?{_GO_TO} )?(?P<place>.+)", clause.text)
+        return _go(place, clause) if place else None
+    if previous.action == "find":
+        return Step("find", thing=clause.text)
+    return None
+
+
+_NUMBER = (
+    r"\d+(?:\.\d+)?|(?:twenty|thirty|forty|fifty) \w+|" + phrases(tuple({**NUMBER_WORDS, **MORE_NUMBER_WORDS}))[3:-1]
+)
 
 
 def _number(text: str) -> float | None:

@@ -32,10 +32,15 @@ from robot.planning.language.lexicon import (
 from robot.planning.planner import ClarificationNeeded, PlanningError
 from robot.planning.world_context import WorldContext, normalize
 
-# A near miss counts from this similarity (rapidfuzz's ratio, 0-100): "red mud" ~ "red mug" is 86, "kitchen
-# counted" ~ "kitchen counter" 93; "jug" ~ "mug" (another object) is 67, "duck" ~ "dock" 75.
+# A near miss counts from this similarity of the whole phrase (rapidfuzz's ratio, 0-100): "red mud" ~ "red mug" is
+# 86, "kitchen counted" ~ "kitchen counter" 93; "jug" ~ "mug" (another object) is 67, "duck" ~ "dock" 75.
 NEAR_MISS_MIN = 80.0
-# ...and when it is this much closer to one name than to any other thing's name; else the two are too close to call
+# ...each word that differs from the name's word in its place must be close to it ("mud" ~ "mug" 67, "stashun" ~
+# "station" 57), not another word ("wine" ~ "water" 44: "the bottle of wine" is no bottle of water; "cab" ~ "cup" 33)
+NEAR_MISS_WORD_MIN = 55.0
+# ...a phrase with more or fewer words than the name must be closer ("livingroom table" ~ "living room table" 97)...
+NEAR_MISS_REGROUPED_MIN = 88.0
+# ...and it must be this much closer to one thing than to any other; else the two are too close to call
 NEAR_MISS_MARGIN = 6.0
 
 _LOCATION = re.compile(
@@ -252,7 +257,7 @@ def _near_miss(words: str, table: dict[str, list[str]]) -> list[str] | None:
     """The thing a misheard or mistyped phrase is closest to, when it is close to one thing only."""
     best: dict[str, float] = {}
     for surface, names in table.items():
-        score = fuzz.ratio(words, surface)
+        score = _likeness(words, surface)
         for name in names:
             best[name] = max(best.get(name, 0.0), score)
     ranked = sorted(best.items(), key=lambda item: item[1], reverse=True)
@@ -260,6 +265,18 @@ def _near_miss(words: str, table: dict[str, list[str]]) -> list[str] | None:
         return None
     close = [name for name, score in ranked if score >= NEAR_MISS_MIN and ranked[0][1] - score < NEAR_MISS_MARGIN]
     return close
+
+
+def _likeness(words: str, surface: str) -> float:
+    """How alike a phrase is to a name, 0-100, as a misheard or mistyped form of it (0 when a word is another
+    word)."""
+    score = fuzz.ratio(words, surface)
+    said, named = words.split(), surface.split()
+    if len(said) != len(named):
+        return score if score >= NEAR_MISS_REGROUPED_MIN else 0.0
+    if any(a != b and fuzz.ratio(a, b) < NEAR_MISS_WORD_MIN for a, b in zip(said, named, strict=True)):
+        return 0.0
+    return score
 
 
 def _question(names: Iterable[str]) -> ClarificationNeeded:
