@@ -13,7 +13,7 @@ make it ask one question (`ClarificationNeeded`), never guess.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from robot.interface import Plan, Step
 from robot.navigation.goal import parse_pose_goal
@@ -22,7 +22,7 @@ from robot.planning.language.clauses import split_command
 from robot.planning.language.intents import Step as Request
 from robot.planning.language.intents import elliptic_step, read_step
 from robot.planning.language.lexicon import NUMBER_WORDS, OBJECT_PRONOUNS, PLACE_PRONOUNS
-from robot.planning.language.names import WorldNames
+from robot.planning.language.names import QUESTION_START, WorldNames
 from robot.planning.planner import ClarificationNeeded, PlanningError
 
 __all__ = ["EXAMPLES", "NUMBER_WORDS", "RulesPlanner"]
@@ -47,12 +47,32 @@ class RulesPlanner:
         raw = text.strip()
         if not raw:
             raise PlanningError("empty command")
+        return self._answer(raw, context) or self._plan(raw, context)
+
+    def _plan(self, raw: str, context: PlanningContext, chosen: frozenset[str] = frozenset()) -> Plan:
         requests = _read(raw)
         if not requests:
             raise PlanningError(f"I don't understand {raw!r}. {self.abilities(context)}")
         if all(r.action == "stop" for r in requests):
             return Plan((Step("stop", {}),))
-        return _Composer(context, raw, self.abilities(context)).compose(requests)
+        return _Composer(context, raw, self.abilities(context), chosen).compose(requests)
+
+    def _answer(self, raw: str, context: PlanningContext) -> Plan | None:
+        """ "the red mug", said after "Did you mean the red mug or the blue bottle?": the command that was asked
+        about, with that reading."""
+        asked = context.history[-1] if context.history else None
+        if asked is None or not asked.outcome.startswith(f"refused: {QUESTION_START}"):
+            return None
+        requests = [r for r in _read(raw) if r.action not in ("nothing", "chatter")]
+        if len(requests) != 1 or requests[0].action != "topic":
+            return None
+        chosen = WorldNames(context.world).name_of(requests[0].thing or "")
+        if chosen is None:
+            return None
+        try:
+            return self._plan(asked.command, replace(context, history=context.history[:-1]), frozenset({chosen}))
+        except PlanningError:
+            return None
 
     @staticmethod
     def abilities(context: PlanningContext) -> str:
@@ -109,9 +129,9 @@ class _Said:
 class _Composer:
     """Turns requests into one plan, keeping track of what the robot will hold and what was last named."""
 
-    def __init__(self, context: PlanningContext, raw: str, abilities: str) -> None:
+    def __init__(self, context: PlanningContext, raw: str, abilities: str, chosen: frozenset[str]) -> None:
         self.world = context.world
-        self.names = WorldNames(context.world)
+        self.names = WorldNames(context.world, chosen)
         self.raw = raw
         self.abilities = abilities
         self.held = context.world.held_object

@@ -107,7 +107,7 @@ function showResult(text, isError) {
   el.textContent = text;
   el.className = "result " + (isError ? "error" : "ok");
 }
-// Two readings were close: the planner asks instead of acting. Answer by typing the command again, named plainly.
+// Two readings were close: the planner asks instead of acting. The answer is typed next ("the red mug").
 function showQuestion(question) {
   const el = $("command-result");
   el.textContent = question;

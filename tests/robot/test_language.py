@@ -245,6 +245,18 @@ def test_what_is_no_ability_is_refused_with_what_the_robot_can_do(world, text: s
     assert "I can fetch or carry the red mug" in message or "known places" in message
 
 
+def test_an_answer_to_the_question_plans_the_command_asked_about_with_that_reading(world) -> None:
+    asked = (Turn("put the blue mug on the table", None, "refused: Did you mean the red mug or the blue bottle?"),)
+    assert plan("no, the blue bottle", world, asked)[2:5] == [
+        ("pick_object", "blue bottle"),
+        ("navigate_to", "living-room table"),
+        ("place_object", "living-room table"),
+    ]
+    assert plan("go home", world, asked) == [("go_home",), ("say", "I am back where I started.")]  # not an answer
+    asked_nothing = (Turn("put the mug on the table", None, "succeeded"),)
+    assert plan("the blue bottle", world, asked_nothing)[-1] == ("say", "Here is the blue bottle.")
+
+
 class _Unreachable:
     name = "openai"
 

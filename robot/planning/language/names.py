@@ -59,8 +59,9 @@ class ObjectReference:
 class WorldNames:
     """The world's objects and places under every name people use for them."""
 
-    def __init__(self, world: WorldContext) -> None:
+    def __init__(self, world: WorldContext, chosen: frozenset[str] = frozenset()) -> None:
         self.world = world
+        self.chosen = chosen  # the operator's answers to earlier questions: among close readings, these win
         self._room_of_word = {w: room for room, words in ROOM_WORDS.items() for w in words}
         self._object_names = _object_table(
             tuple((o, a, world.object_colors.get(o), world.object_shapes.get(o)) for o, a in world.objects.items())
@@ -84,15 +85,15 @@ class WorldNames:
     def _object_name(self, words: str, phrase: str) -> str:
         exact = self._object_names.get(words)
         if exact:
-            return _one(exact)
+            return self._one(exact)
         if words in DRINK_WORDS:
-            return _one(self._objects_where(lambda o: self._shape(o) in DRINK_SHAPES))
+            return self._one(self._objects_where(lambda o: self._shape(o) in DRINK_SHAPES))
         described = self._described_object(words)
         if described is not None:
             return described
         near = _near_miss(words, self._object_names)
         if near is not None:
-            return _one(near)
+            return self._one(near)
         raise PlanningError(f"unknown object {_quoted(phrase)}; known objects: {self.known_objects()}")
 
     def _described_object(self, words: str) -> str | None:
@@ -107,11 +108,19 @@ class WorldNames:
         by_shape = self._objects_where(lambda o: self._shape(o) == shape) if shape else by_colour
         both = [o for o in by_shape if o in by_colour]
         if both:
-            return _one(both)
+            return self._one(both)
         if by_colour and by_shape:
-            raise _question(by_shape + by_colour)
+            return self._one(by_shape + by_colour)
         known = self.known_objects()
         raise PlanningError(f"there is no {words} here; known objects: {known}")
+
+    def _one(self, names: Iterable[str]) -> str:
+        """The one thing these names come to (or the one the operator chose among them), else a question."""
+        unique = list(dict.fromkeys(names))
+        chosen = [n for n in unique if n in self.chosen]
+        if len(unique) == 1 or len(chosen) == 1:
+            return (chosen or unique)[0]
+        raise _question(unique)
 
     def known_objects(self) -> str:
         return ", ".join(self.world.objects)
@@ -136,13 +145,13 @@ class WorldNames:
             return self._place_in_room(words, room, phrase)
         exact = self._place_names.get(words)
         if exact:
-            return _one(exact)
+            return self._one(exact)
         described = self._described_place(words, phrase)
         if described is not None:
             return described
         near = _near_miss(words, self._place_names)
         if near is not None:
-            return _one(near)
+            return self._one(near)
         raise PlanningError(f"unknown place {_quoted(phrase)}; known places: {self.known_places()}")
 
     def _described_place(self, words: str, phrase: str) -> str | None:
@@ -165,9 +174,9 @@ class WorldNames:
                 raise PlanningError(f"unknown place {_quoted(phrase)}; known places: {self.known_places()}")
         both = [p for p in fitting if p in in_room]
         if both:
-            return _one(both)
+            return self._one(both)
         if fitting and in_room:
-            raise _question([*fitting, *in_room])
+            return self._one([*fitting, *in_room])
         raise PlanningError(f"there is no {noun} in the {room}; known places: {self.known_places()}")
 
     def _room(self, words: str, phrase: str) -> str:
@@ -180,6 +189,15 @@ class WorldNames:
         return ", ".join(self.world.places)
 
     # --- either ----------------------------------------------------------------------------------------------
+
+    def name_of(self, phrase: str) -> str | None:
+        """The one object or place a phrase names, or None."""
+        for look_up in (lambda: self.object(phrase).name, lambda: self.place(phrase)):
+            try:
+                return look_up()
+            except PlanningError:
+                continue
+        return None
 
     def target(self, phrase: str) -> str:
         """Where to walk to: a place, or the place where an object is believed to be ("go to the mug")."""
@@ -240,14 +258,6 @@ def _add(table: dict[str, list[str]], said: Iterable[str], name: str) -> None:
             names.append(name)
 
 
-def _one(names: Iterable[str]) -> str:
-    """The one thing these names come to, or a question when they are several."""
-    unique = list(dict.fromkeys(names))
-    if len(unique) == 1:
-        return unique[0]
-    raise _question(unique)
-
-
 def _clean(phrase: str) -> str:
     """Lower case, no determiners and no adjectives that tell nothing apart: "the little red cup" -> "red cup"."""
     return " ".join(w for w in normalize(phrase).split() if w not in _DROPPED)
@@ -279,10 +289,13 @@ def _likeness(words: str, surface: str) -> float:
     return score
 
 
+QUESTION_START = "Did you mean"
+
+
 def _question(names: Iterable[str]) -> ClarificationNeeded:
     options = tuple(dict.fromkeys(names))
     listed = " or ".join(f"the {n}" for n in options)
-    return ClarificationNeeded(f"Did you mean {listed}?", options)
+    return ClarificationNeeded(f"{QUESTION_START} {listed}?", options)
 
 
 def _quoted(phrase: str) -> str:
