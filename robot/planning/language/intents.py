@@ -126,7 +126,10 @@ _STOP = (
     r"(?: (?:stop|halt|freeze|now|right now|immediately|please|at once|robot|right there|there|everything|"
     r"moving|it|all))*"
 )
-_AROUND = r"(?: (?:around you|around|here|in the room|right now|in front of you|near you|nearby|over there|there))?"
+_AROUND = (
+    r"(?: (?:around you|around|here|in the room|right now|in front of you|near you|nearby|over there|there|"
+    r"from where you are|from there|from here))?"
+)
 _LOOK_AND_TELL = (
     r"(?:(?:tell me|let me know|say|describe|report|can you tell me|tell me about) )?"
     r"(?:(?:what|which objects|what things) (?:do|can) you (?:see|spot|make out)|what you (?:can )?(?:see|spot)|"
@@ -150,7 +153,8 @@ _ROOMS = phrases(
     )
 )
 _LOOK = (
-    rf"(?:(?:have|take) a )?(?:look|glance|peek)(?: (?:around|round|about))(?: {_ROOMS})?|"
+    rf"(?:(?:have|take) a (?:quick |little |good |short )?)?(?:{verbs('look', 'glance', 'peek')})"
+    rf"(?: (?:around|round|about))(?: {_ROOMS})?|"
     rf"scan (?:around|your surroundings|{_ROOMS})|check (?:your|the) surroundings|"
     rf"survey (?:your surroundings|{_ROOMS})|have a look round"
 )
@@ -214,6 +218,7 @@ def _shapes() -> tuple[tuple[re.Pattern[str], Build], ...]:
     to_me = lambda m, c: _thing(m, c, "fetch", to_me=True)  # noqa: E731
     shapes: list[tuple[str, Build]] = [
         (_STOP, lambda m, c: Step("stop")),
+        (rf"{_GO_TO} (?P<place>.+)", _go),  # "off you go, to the kitchen"
         # "and tell me when you're done": the plan's last step says so anyway
         (
             r"(?:tell|let) (?:me|us)(?: know)? (?:when|once) (?:you are|you have|it is|that is) (?:done|finished|"

@@ -64,7 +64,8 @@ FILLER_PREFIXES = word_list("""
     i would appreciate if you could, i would be grateful if you could, it would be nice if you could,
     would it be possible to, would it be possible for you to, is it possible for you to, is it possible to,
     could the robot, help me, can you help me, could you help me, let us, i think, i guess, i suppose, pls,
-    plz, about, what about, how about, no, i meant, i mean,
+    plz, about, what about, how about, no, i meant, i mean, mind, whoa, woah, oops, ah, oh no, off you go,
+    on you go,
     once done, when that is done, when finished""")
 FILLER_SUFFIXES = word_list("""
     if you do not mind, when you get a chance, when you can, if you can, if you could, thank you very much,

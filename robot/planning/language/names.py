@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 from rapidfuzz import fuzz
+from rapidfuzz.distance import DamerauLevenshtein
 
 from robot.planning.language.lexicon import (
     COLOURS,
@@ -259,8 +260,10 @@ def _add(table: dict[str, list[str]], said: Iterable[str], name: str) -> None:
 
 
 def _clean(phrase: str) -> str:
-    """Lower case, no determiners and no adjectives that tell nothing apart: "the little red cup" -> "red cup"."""
-    return " ".join(w for w in normalize(phrase).split() if w not in _DROPPED)
+    """Lower case, no determiners, no adjectives that tell nothing apart and no pointing: "that little red cup
+    over there" -> "red cup"."""
+    words = " ".join(w for w in normalize(phrase).split() if w not in _DROPPED)
+    return re.sub(r"(?<=\w) (?:over |right )?(?:there|here)$", "", words)
 
 
 def _near_miss(words: str, table: dict[str, list[str]]) -> list[str] | None:
@@ -282,6 +285,8 @@ def _likeness(words: str, surface: str) -> float:
     word)."""
     score = fuzz.ratio(words, surface)
     said, named = words.split(), surface.split()
+    if len(said) == len(named) == 1 and DamerauLevenshtein.distance(words, surface) > 1:
+        return 0.0  # one word: one slip ("bottel", "aple"), not another word ("basket" is no "base")
     if len(said) != len(named):
         return score if score >= NEAR_MISS_REGROUPED_MIN else 0.0
     if any(a != b and fuzz.ratio(a, b) < NEAR_MISS_WORD_MIN for a, b in zip(said, named, strict=True)):

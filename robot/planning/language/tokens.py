@@ -17,6 +17,7 @@ _DASH = re.compile("[-\u2013\u2014]+")
 _OPENED = {"n't": ("not",), "'m": ("am",), "'re": ("are",), "'ve": ("have",), "'ll": ("will",), "'d": ("would",)}
 _IRREGULAR = {"can't": ("can", "not"), "won't": ("will", "not"), "let's": ("let", "us"), "y'all": ("you", "all")}
 # 's after these is "is"; after anything else it marks a possessive ("the living room's table")
+_DID_AFTER = frozenset(("where", "what", "how", "who", "why", "when"))
 _IS_AFTER = frozenset(("it", "that", "what", "where", "there", "here", "who", "he", "she", "this", "how", "everything"))
 
 
@@ -54,6 +55,8 @@ def _open(word: str) -> tuple[str, ...]:
         return (word,)
     if word in _IRREGULAR:
         return _IRREGULAR[word]
+    if word.endswith("'d") and word[:-2] in _DID_AFTER:  # "where'd it go": did
+        return (word[:-2], "did")
     for ending, opened in _OPENED.items():
         if word.endswith(ending):
             stem = word[: -len(ending)]
