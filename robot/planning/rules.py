@@ -13,6 +13,7 @@ make it ask one question (`ClarificationNeeded`), never guess.
 from __future__ import annotations
 
 import re
+from collections.abc import Iterable
 from dataclasses import dataclass, replace
 
 from robot.interface import Plan, Step
@@ -25,13 +26,7 @@ from robot.planning.language.lexicon import NUMBER_WORDS, OBJECT_PRONOUNS, PLACE
 from robot.planning.language.names import QUESTION_START, WorldNames
 from robot.planning.planner import ClarificationNeeded, PlanningError
 
-__all__ = ["EXAMPLES", "NUMBER_WORDS", "RulesPlanner"]
-
-EXAMPLES = (
-    "'pick up the red mug from the kitchen counter', 'bring the red mug to the living-room table', "
-    "'go to the charging dock', 'find the green apple', 'what do you see', 'go home', 'wait 5 seconds', 'stop' "
-    "or 'say hello'"
-)
+__all__ = ["NUMBER_WORDS", "RulesPlanner"]
 
 
 class RulesPlanner:
@@ -79,8 +74,9 @@ class RulesPlanner:
         """What the robot can do, said when it cannot do what it was asked."""
         world = context.world
         return (
-            f"I can fetch or carry the {', the '.join(world.objects)}; go to the {', the '.join(world.places)} "
-            f"or home; find things, look around and tell what I see; say something; wait; stop. Try e.g. {EXAMPLES}."
+            f"I can fetch or carry {_any_of(f'the {o}' for o in world.objects)}; go to "
+            f"{_any_of([*(f'the {p}' for p in world.places), 'home'])}; find things; look around and tell what I "
+            "see; say something; wait; stop."
         )
 
 
@@ -272,6 +268,12 @@ class _Composer:
             Step("detect_object", {"object": obj}),
             Step("pick_object", {"object": obj}),
         ]
+
+
+def _any_of(items: Iterable[str]) -> str:
+    """'the red mug, the blue bottle or the green apple'."""
+    listed = list(items)
+    return ", ".join(listed[:-1]) + f" or {listed[-1]}" if len(listed) > 1 else "".join(listed)
 
 
 def _the(target: str) -> str:
