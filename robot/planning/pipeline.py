@@ -30,6 +30,7 @@ class PlannerConfig:
     local_model_path: str = ""
     local_threads: int | None = None
     local_timeout_s: float = 20.0
+    local_chat_format: str = ""  # for a GGUF without a chat template; "" chooses from its model family
     max_repairs: int = 1  # re-asks of an LLM whose plan does not validate, with the errors
     fallback_to_rules: bool = True
 
@@ -130,6 +131,11 @@ def build_llm_planner(config: PlannerConfig) -> Planner:
     if config.backend == "local":
         from robot.planning.local_chat import LocalChat
 
-        chat = LocalChat(config.local_model_path, n_threads=config.local_threads, timeout_s=config.local_timeout_s)
+        chat = LocalChat(
+            config.local_model_path,
+            n_threads=config.local_threads,
+            timeout_s=config.local_timeout_s,
+            chat_format=config.local_chat_format,
+        )
         return LLMPlanner(chat, config.max_repairs)
     raise PlanningError(f"unknown planner backend {config.backend!r} (known: {', '.join(BACKENDS)})")

@@ -11,17 +11,19 @@ from __future__ import annotations
 from typing import Any
 
 from robot.planning.examples import CANNOT
-from robot.planning.schema import ACTIONS, MAX_ARG_LENGTH, MAX_STEPS, MAX_WAIT_S
+from robot.planning.schema import ACTIONS, MAX_STEPS, MAX_WAIT_S
 from robot.planning.world_context import WorldContext
 
-# a pose on the map, as `PoseGoal.text()` writes it: "1.20, 0.50" or "1.20, 0.50, 90 deg"
-POSE_PATTERN = r"^-?[0-9]{1,2}(\.[0-9]{1,2})?, -?[0-9]{1,2}(\.[0-9]{1,2})?(, -?[0-9]{1,3} deg)?$"
+# a pose on the map, as `PoseGoal.text()` writes it: "1.20, 0.50" or "1.20, 0.50, 90 deg" (no escapes: llama.cpp's
+# grammar converter does not take them)
+POSE_PATTERN = r"^-?[0-9]{1,2}([.][0-9]{1,2})?, -?[0-9]{1,2}([.][0-9]{1,2})?(, -?[0-9]{1,3} deg)?$"
 
 
 def world_plan_schema(world: WorldContext, max_steps: int = MAX_STEPS) -> dict[str, Any]:
     """`{"steps": [...]}` in the seed's flat shape, one of the actions (or `cannot`) per step."""
     places, objects = list(world.places), list(world.objects)
-    text = {"type": "string", "minLength": 1, "maxLength": MAX_ARG_LENGTH}
+    text = {"type": "string", "minLength": 1}  # (a length limit becomes a grammar of 200 nested rules: the
+    # validator checks it)
     values: dict[str, dict[str, Any]] = {
         "target": {"anyOf": [_one_of(places + objects), {"type": "string", "pattern": POSE_PATTERN}]},
         "object": _one_of(objects),
