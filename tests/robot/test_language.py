@@ -227,6 +227,21 @@ def test_a_sequence_says_only_its_last_confirmation_and_does_not_walk_twice(worl
     ]
 
 
+@pytest.mark.parametrize(
+    ("text", "seconds"),
+    [
+        ("wait thirty seconds", "30"),
+        ("pause twenty five seconds", "25"),
+        ("hold on a sec", "1"),
+        ("wait half a minute", "30"),
+        ("wait for 2.5 s", "2.5"),
+        ("stay still for a couple of seconds", "2"),
+    ],
+)
+def test_a_wait_is_read_in_words_or_digits(world, text: str, seconds: str) -> None:
+    assert plan(text, world) == [("wait", seconds)]
+
+
 def test_stop_with_more_words_is_a_stop_but_stop_there_ends_another_step(world) -> None:
     assert plan("stop right now please", world) == [("stop",)]
     assert plan("OK robot, stop.", world) == [("stop",)]
@@ -268,3 +283,32 @@ def test_a_question_from_the_rules_fallback_reaches_the_operator_as_a_question(w
     pipeline = PlanningPipeline(_Unreachable(), "openai", fallback=RulesPlanner())
     with pytest.raises(ClarificationNeeded, match="Did you mean the red mug or the blue bottle"):
         pipeline.plan("bring me the blue mug", PlanningContext(world))
+
+
+def test_every_kind_of_sentence_the_speech_grammar_hears_is_planned(world) -> None:
+    """What the grammar recogniser returns is a sentence of its grammar: each must still plan."""
+    from robot.planning.rules import NUMBER_WORDS
+    from robot.speech.grammar import CARRY, FIND, GIVE, GO, HOME, LOOK, PICK, POLITE, STOP
+
+    objects = [n for name, aliases in world.objects.items() for n in (name, *aliases)]
+    places = [n for name, aliases in world.places.items() for n in (name, *aliases)]
+    sentences = [
+        *(f"{v} the {o} from the {p}" for v in PICK for o in objects for p in places[:2]),
+        *(f"{v} the {o}" for v in GIVE for o in objects),
+        *(f"{v} the {o} down on the {p}" for v in CARRY for o in objects[:3] for p in places),
+        *(f"{v} back to the {p}" for v in GO for p in places),
+        *(f"{v} the {o}" for v in FIND for o in objects),
+        *STOP,
+        *LOOK,
+        *HOME,
+        *(f"wait for {n} seconds" for n in NUMBER_WORDS),
+    ]
+    sentences += [f"{polite} {s} please" for polite in POLITE for s in sentences[::17]]
+    planner, context = RulesPlanner(), PlanningContext(world)
+    unplanned = []
+    for sentence in sentences:
+        try:
+            planner.plan(sentence, context)
+        except PlanningError as exc:
+            unplanned.append((sentence, str(exc)[:80]))
+    assert unplanned == []

@@ -345,7 +345,8 @@ def elliptic_step(clause: Clause, previous: Step) -> Step | None:
 
 
 _NUMBER = (
-    r"\d+(?:\.\d+)?|(?:twenty|thirty|forty|fifty) \w+|" + phrases(tuple({**NUMBER_WORDS, **MORE_NUMBER_WORDS}))[3:-1]
+    r"\d+(?:\.\d+)?|(?:twenty|thirty|forty|fifty) (?:one|two|three|four|five|six|seven|eight|nine)|"
+    + phrases(tuple({**NUMBER_WORDS, **MORE_NUMBER_WORDS}))[3:-1]
 )
 
 
