@@ -113,7 +113,7 @@ def measure(pipeline: PlanningPipeline, backend: str, cases: tuple[LanguageCase,
     for case in cases:
         outcome = plan_case(pipeline, case, layout)
         latencies.append(outcome.latency_s)
-        is_right = outcome.right_for(case) and (outcome.plan is None or outcome.planner == backend)
+        is_right = outcome.right_for(case) and _by(outcome, backend)
         fell_back += outcome.plan is not None and outcome.planner != backend
         right[case.kind] += is_right
         counts = by_topic.setdefault(f"{case.kind}: {case.topic}", [0, 0])
@@ -142,6 +142,17 @@ def measure(pipeline: PlanningPipeline, backend: str, cases: tuple[LanguageCase,
         "by_topic": {topic: f"{r}/{n}" for topic, (r, n) in sorted(by_topic.items())},
         "wrong": wrong,
     }
+
+
+def _by(outcome: Outcome, backend: str) -> bool:
+    """Whether the backend itself gave this outcome: a plan it made, a refusal it made (it said it cannot, or none
+    of its plans held in the world), not what the rules fallback did after it failed or could not be reached."""
+    if backend == "rules":
+        return True
+    if outcome.plan is not None:
+        return outcome.planner == backend
+    refused = outcome.refusal or ""
+    return f"{backend} says it cannot" in refused or f"{backend} gave no valid plan" in refused
 
 
 def _rate(right: int, of: int) -> float | None:
