@@ -166,22 +166,31 @@ _CHARGE = (
 _SOURCE = phrases(word_list("from, off of, off, out of, on, at, in, up from, up off, on top of"))
 _AWAY = phrases(word_list("back, over, down, off, up, away, across"))
 _ONTO = phrases(
-    word_list("""to, onto, on, into, in, at, over to, on to, back to, down on, down at, off at,
-                             on top of, next to, by, near, beside, inside, up on, over on, down to, across to,
-                             in to, down onto, back on""")
+    word_list("""to, onto, on, into, in, at, over to, on to, back to, down on, down at, off at, on top of, next to,
+                 by, near, beside, inside, up on, over on, down to, across to, in to, down onto, back on""")
 )
-_HERE = phrases(
-    word_list("""here, to me, to us, over to me, back to me, over here, back here, this way, my way,
-                             over""")
-)
+_HERE = phrases(word_list("here, to me, to us, over to me, back to me, over here, back here, this way, my way, over"))
 _GO_TO = phrases(
     word_list("to, towards, toward, into, in to, over to, up to, down to, round to, across to, onto, on to")
 )
 
 
-def _thing(m: re.Match[str], clause: Clause, action: str, **kw: object) -> Step:
+def _thing(m: re.Match[str], action: str, to_me: bool = False) -> Step:
     groups = m.groupdict()
-    return Step(action, thing=groups.get("thing"), source=groups.get("source"), **kw)  # type: ignore[arg-type]
+    return Step(action, thing=groups.get("thing"), source=groups.get("source"), to_me=to_me)
+
+
+def _find(m: re.Match[str], clause: Clause) -> Step:
+    return _thing(m, "find")
+
+
+def _fetch(m: re.Match[str], clause: Clause) -> Step:
+    return _thing(m, "fetch")
+
+
+def _hand_over(m: re.Match[str], clause: Clause) -> Step:
+    """Fetched for the person who asked ("bring me the cup", "bring it here")."""
+    return _thing(m, "fetch", to_me=True)
 
 
 def _go(m: re.Match[str], clause: Clause) -> Step:
@@ -192,7 +201,7 @@ def _go(m: re.Match[str], clause: Clause) -> Step:
 
 def _carry(m: re.Match[str], clause: Clause) -> Step:
     if re.fullmatch(r"(?:me|us|you|here|me here|the person|whoever asked)", m.group("place")):
-        return _thing(m, clause, "fetch", to_me=True)
+        return _hand_over(m, clause)
     return Step("carry", thing=m.group("thing"), source=m.groupdict().get("source"), place=m.group("place"))
 
 
@@ -214,8 +223,6 @@ def _shapes() -> tuple[tuple[re.Pattern[str], Build], ...]:
         rf"(?:{verbs(*WAIT_VERBS)}|hold on|hang on|hold|hang tight|sit tight|stay|stay still|stay put|"
         r"stand still|stand by|hold still|stand there|stand)"
     )
-    find = lambda m, c: _thing(m, c, "find")  # noqa: E731
-    to_me = lambda m, c: _thing(m, c, "fetch", to_me=True)  # noqa: E731
     shapes: list[tuple[str, Build]] = [
         (_STOP, lambda m, c: Step("stop")),
         (rf"{_GO_TO} (?P<place>.+)", _go),  # "off you go, to the kitchen"
@@ -260,38 +267,38 @@ def _shapes() -> tuple[tuple[re.Pattern[str], Build], ...]:
             rf"{verbs('hunt')}(?: around)? for|(?:have|take) a look(?: around)? for|check for|see if you can "
             r"(?:find|spot|see)|try to find|see|spot) (?P<thing>.+?)(?: (?:anywhere|around|here|in the room|"
             r"around here|nearby))?",
-            find,
+            _find,
         ),
         (
             r"where (?:did|has|have|does) (?P<thing>.+?) (?:go|gone|went|get to|got to|end up|ended up|disappear to)",
-            find,
+            _find,
         ),
         (
             r"(?:where is|where are|where|where did you put|where can i find) (?P<thing>.+?)"
             r"(?: (?:now|at the moment|right now|gone|go|at))?",
-            find,
+            _find,
         ),
         (
             r"(?:check|tell me|show me|find out|do you know|can you tell me|let me know|see|say) where (?P<thing>.+?)"
             r" (?:is|are|went|has gone)(?: now| located| kept| at the moment| right now)?",
-            find,
+            _find,
         ),
-        (r"(?:is|are) (?P<thing>.+?) (?:anywhere(?: around| here| nearby)?|around(?: here)?|nearby|here)", find),
+        (r"(?:is|are) (?P<thing>.+?) (?:anywhere(?: around| here| nearby)?|around(?: here)?|nearby|here)", _find),
         (
             r"(?:can you see|do you see|is there|are there|have you seen|did you see) (?P<thing>.+?)"
             r"(?: (?:anywhere|around|here|around here))?",
-            find,
+            _find,
         ),
         # handed over: "bring me the cup", "bring it here", "I'd like the apple"
         (
             rf"{go_first}{verbs(*HAND_VERBS)} (?:me|us)(?: over)? (?P<thing>.+?)(?: {_SOURCE} (?P<source>.+?))?"
             rf"(?: {_HERE})?",
-            to_me,
+            _hand_over,
         ),
         (
             rf"{go_first}{verbs('bring', 'fetch', 'get', 'carry', 'take', 'grab', 'give', 'hand', 'pass')} "
             rf"(?P<thing>.+?)(?: {_SOURCE} (?P<source>.+?))? {_HERE}",
-            to_me,
+            _hand_over,
         ),
         # "I want the apple on the table": put there; "I'd like the apple": handed over
         (
@@ -303,7 +310,7 @@ def _shapes() -> tuple[tuple[re.Pattern[str], Build], ...]:
             r"(?:i want|i need|i would like|i would love|can i have|may i have|can i get|could i have|could i get|"
             r"i will have|i will take|give me|i want to have|i would like to have|can i please have|could i please "
             rf"have) (?P<thing>.+?)(?: {_SOURCE} (?P<source>.+?))?",
-            to_me,
+            _hand_over,
         ),
         # carry somewhere
         (
@@ -319,13 +326,13 @@ def _shapes() -> tuple[tuple[re.Pattern[str], Build], ...]:
         (
             rf"{go_first}{verbs('bring', 'fetch', 'pass', 'hand')}(?: over| back| along| round)? (?P<thing>.+?)"
             rf"(?: {_SOURCE} (?P<source>.+?))?",
-            to_me,
+            _hand_over,
         ),
         # pick up
         (
             rf"{go_first}{verbs(*PICK_VERBS)}(?: up)? (?P<thing>.+?)(?: up| down| out)?(?: {_SOURCE} (?P<source>.+?))?"
             r"(?: up)?",
-            lambda m, c: _thing(m, c, "fetch"),
+            _fetch,
         ),
         # last, "go kitchen": a recognition error dropped the small word; only verbs that always mean walking
         (rf"{verbs('go', 'walk', 'head', 'navigate', 'drive', 'travel', 'proceed')} (?P<place>.+)", _go),
