@@ -181,6 +181,16 @@ def test_an_impossible_command_fails_with_both_reasons(server: str, context) -> 
         assert "elephant" not in json.dumps(result.plan.to_seed_list())
 
 
+def test_a_gguf_without_a_chat_template_is_prompted_in_its_familys_format(model_path: Path) -> None:
+    _require("llama_cpp")
+    from robot.planning.local_chat import LocalChat
+
+    chat = LocalChat(str(model_path), n_ctx=512, n_threads=2)
+    assert "tokenizer.chat_template" not in chat._llama.metadata  # the packaged Gemma 3 270M is a base model
+    assert chat.chat_format == "gemma" and chat._llama.chat_format == "gemma"  # not llama.cpp's Llama 2 fallback
+    assert LocalChat(str(model_path), n_ctx=512, n_threads=2, chat_format="chatml").chat_format == "chatml"
+
+
 def test_the_local_backend_runs_the_same_model_in_process(model_path: Path, context) -> None:
     _require("llama_cpp")
     pipeline = build_pipeline(PlannerConfig(backend="local", local_model_path=str(model_path), local_threads=2))
