@@ -192,7 +192,7 @@ def _plan(args: argparse.Namespace, settings: Settings) -> int:
     from robot.model.world import generate_world
     from robot.planning.context import PlanningContext
     from robot.planning.pipeline import build_pipeline
-    from robot.planning.planner import PlanningError
+    from robot.planning.planner import ClarificationNeeded, PlanningError
     from robot.planning.world_context import WorldContext
 
     if args.backend:
@@ -206,6 +206,12 @@ def _plan(args: argparse.Namespace, settings: Settings) -> int:
     pipeline = build_pipeline(settings.planner_config())
     try:
         result = pipeline.plan(args.text, PlanningContext(world))
+    except ClarificationNeeded as exc:  # two close readings: a question, and no plan
+        if args.json:
+            print(json.dumps({"clarify": exc.question, "options": list(exc.options), "plan": None}, indent=2))
+        else:
+            print(f"question: {exc.question}", file=sys.stderr)
+        return 1
     except PlanningError as exc:
         print(f"no plan: {exc}", file=sys.stderr)
         return 1
@@ -331,7 +337,11 @@ def build_parser() -> argparse.ArgumentParser:
                       help="planner backend (default: HUMANOID_PLANNER_BACKEND, else rules)")  # fmt: skip
     plan.add_argument("--seed", type=int, default=0, help="world seed (which places and objects exist)")
     plan.add_argument("--holding", default=None, help="plan as if the robot held this object")
-    plan.add_argument("--json", action="store_true", help="print the plan as a JSON list of actions")
+    plan.add_argument(
+        "--json",
+        action="store_true",
+        help='print the plan as a JSON list of actions (or {"clarify": QUESTION} when it must ask)',
+    )
     plan.set_defaults(func=_plan)
 
     estop = sub.add_parser("estop", help="latch (or --release) the e-stop of a running server")
@@ -360,6 +370,7 @@ def build_parser() -> argparse.ArgumentParser:
         "perception",
         "capstone",
         "planner",
+        "language",
         "voice",
         "sessions",
         "diagnostics",
@@ -396,11 +407,16 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--jobs", type=int, default=1, help="capstone: runs at once (1 measures wall time fairly)")
     bench.add_argument("--views", type=int, default=6, help="perception: viewpoints per world")
     bench.add_argument("--tours", type=int, default=5, help="perception: mapping tours (one world each)")
-    bench.add_argument("--backends", default="rules",
-                       help="planner: backends to measure, comma-separated (rules, openai, local)")  # fmt: skip
+    bench.add_argument(
+        "--backends",
+        default=None,
+        help="planner, language: backends to measure, comma-separated (rules, openai, local); default rules "
+        "(planner), rules and every configured LLM backend (language)",
+    )
     bench.add_argument("--repeat", type=int, default=1, help="planner: times each command is planned")
-    bench.add_argument("--no-fallback", action="store_true",
-                       help="planner: judge an LLM backend alone (no rules fallback)")  # fmt: skip
+    bench.add_argument(
+        "--no-fallback", action="store_true", help="planner, language: judge an LLM backend alone (no rules fallback)"
+    )
     bench.set_defaults(func=_bench)
     return parser
 

@@ -58,4 +58,5 @@ def reply_json(reply: CommandReply) -> dict[str, Any]:
         "errors": list(reply.errors),
         "command_id": reply.command_id,
         "plan": reply.plan.to_dict() if reply.plan else None,
+        "clarify": reply.clarify,
     }

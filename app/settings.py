@@ -86,6 +86,11 @@ class Settings(BaseSettings):
     local_model_path: str = Field("", description="GGUF model file for the local backend (pip install .[local-llm])")
     local_threads: int | None = Field(None, ge=1, le=256)
     local_timeout_s: float = Field(20.0, gt=0, le=300, description="longest a local model may take for a reply")
+    local_chat_format: str = Field(
+        "",
+        description="chat format of a GGUF without a chat template (llama-cpp-python's names: gemma, chatml, "
+        "...); empty chooses one from the model's family",
+    )
     planner_max_repairs: int = Field(1, ge=0, le=5, description="re-asks of an LLM whose plan is invalid")
     planner_fallback: bool = Field(True, description="plan with rules when the LLM backend fails")
     max_auto_replans: int = Field(2, ge=0, le=10, description="automatic replans of a command after failed steps")
@@ -158,6 +163,7 @@ class Settings(BaseSettings):
             local_model_path=self.local_model_path,
             local_threads=self.local_threads,
             local_timeout_s=self.local_timeout_s,
+            local_chat_format=self.local_chat_format,
             max_repairs=self.planner_max_repairs,
             fallback_to_rules=self.planner_fallback,
         )

@@ -284,6 +284,7 @@ class CommandReply:
     errors: tuple[str, ...] = ()
     command_id: int | None = None
     plan: Plan | None = None
+    clarify: str | None = None  # not planned: two readings were close, and this is the question to ask
 
 
 # ---------------------------------------------------------------------------------------------------------------

@@ -114,7 +114,7 @@ from robot.planning.executor import (
     default_capabilities,
 )
 from robot.planning.pipeline import PlannerConfig, PlanningPipeline, PlanResult, build_pipeline
-from robot.planning.planner import Planner, PlanningError
+from robot.planning.planner import ClarificationNeeded, Planner, PlanningError
 from robot.planning.validator import validate_plan_json
 from robot.planning.world_context import WorldContext
 from robot.power.battery import Battery, ServoElectrical
@@ -846,9 +846,15 @@ class RobotWorker(InProcessPort):
         """Plan `text` with the configured planner (falling back to rules); a refusal when no plan could be made."""
         try:
             result = self.planning.plan(text, context)
+        except ClarificationNeeded as exc:
+            asked = f"asked about {text!r}: {exc.question}"
+            self._bus.publish(
+                "plan/clarify", asked, Level.OK, text=text, question=exc.question, options=list(exc.options)
+            )
+            return CommandReply(False, exc.question, Refusal.INVALID, (exc.question,), clarify=exc.question)
         except PlanningError as exc:
-            self._bus.publish("plan/rejected", f"could not plan {text!r}: {exc}", Level.WARN, text=text,
-                              backend=self.planning.backend)  # fmt: skip
+            rejected = f"could not plan {text!r}: {exc}"
+            self._bus.publish("plan/rejected", rejected, Level.WARN, text=text, backend=self.planning.backend)
             return CommandReply(False, str(exc), Refusal.INVALID, (str(exc),))
         if result.notes:
             kind = "plan/fallback" if result.planner != result.backend else "plan/repaired"

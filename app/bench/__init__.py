@@ -42,11 +42,22 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
         from app.settings import get_settings
 
         try:
-            backends = parse_backends(args.backends)
+            backends = parse_backends(args.backends or "rules")
         except ValueError as exc:
             print(exc, file=sys.stderr)
             return 2
         result = run_planner(get_settings(), backends, repeat=args.repeat, no_fallback=args.no_fallback)
+    elif suite == "language":
+        from app.bench.language import run_language
+        from app.bench.planner import parse_backends
+        from app.settings import get_settings
+
+        try:
+            backends = parse_backends(args.backends) if args.backends else None
+        except ValueError as exc:
+            print(exc, file=sys.stderr)
+            return 2
+        result = run_language(get_settings(), backends, no_fallback=args.no_fallback)
     elif suite == "sessions":
         from app.bench.sessions import run_sessions
 

@@ -8,7 +8,7 @@ LLM words it its own way) but it must say something.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 from robot.interface import Plan
 from robot.model.world import WorldLayout
@@ -172,7 +172,16 @@ def normalise_text(text: str) -> str:
     return " ".join(text.lower().strip().rstrip(".!").split())
 
 
-def context_for(case: Case, layout: WorldLayout) -> PlanningContext:
+class Asked(Protocol):
+    """A command asked in a context: what the robot holds, and the conversation so far."""
+
+    @property
+    def held(self) -> str | None: ...
+    @property
+    def history(self) -> tuple[tuple[str, Seed], ...]: ...
+
+
+def context_for(case: Asked, layout: WorldLayout) -> PlanningContext:
     """The planning context a case is asked in: the layout's world, what is held, the conversation so far."""
     history = tuple(
         Turn(command, Plan.from_dict(canonical_plan_json(plan)), "succeeded") for command, plan in case.history

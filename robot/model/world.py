@@ -79,6 +79,16 @@ class Place:
     def surface_height(self) -> float:
         return self.surface.height if self.surface else 0.0
 
+    @property
+    def room(self) -> str:
+        """Which room it is in, as people name it ("the table in the living room")."""
+        return room_at(self.approach[0])
+
+
+def room_at(x: float) -> str:
+    """The room a point is in: the partition splits the living room (x < PARTITION_X) from the kitchen."""
+    return "kitchen" if x > PARTITION_X else "living room"
+
 
 @dataclass(frozen=True)
 class WorldObject:

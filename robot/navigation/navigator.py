@@ -65,6 +65,9 @@ RETARGET_M = 0.04
 RETARGET_MIN_REMAINING_M = 0.7
 MAX_RETARGETS = 3
 BLOCKED_WAIT_S = 3.0  # a path found blocked is retried for this long before giving up
+# The first map comes from the sensors' own process within a second or so; on a loaded machine (or in a headless
+# run, whose simulated time outpaces the sensors) it can take longer: the robot stands and waits for it.
+FIRST_MAP_WAIT_S = 30.0
 STUCK_S = 20.0
 # Final approach (gains of the closed-loop walking prototype's go-to-pose, shared FINDINGS.md)
 APPROACH_GAIN = (0.8, 0.8, 1.2)
@@ -397,8 +400,12 @@ class Navigator:
 
     def _costmap(self) -> Costmap:
         costmap = self.body.costmap(ROBOT_RADIUS + CLEARANCE_M)
+        deadline = self._now() + FIRST_MAP_WAIT_S
+        while costmap is None and self._now() < deadline:
+            self.body.wait(CONTROL_PERIOD_S)
+            costmap = self.body.costmap(ROBOT_RADIUS + CLEARANCE_M)
         if costmap is None:
-            raise NavigationFailed("no map yet: the lidar has not produced one")
+            raise NavigationFailed(f"no map yet: the lidar has not produced one in {FIRST_MAP_WAIT_S:.0f} s")
         return costmap
 
     def _follow_path(self, goal: tuple[float, float], facing: float | None, report: NavigationReport,

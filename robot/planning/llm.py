@@ -14,9 +14,10 @@ from typing import Any, Protocol
 from robot.interface import Plan
 from robot.planning import prompt
 from robot.planning.context import PlanningContext
+from robot.planning.examples import CANNOT
 from robot.planning.planner import PlanningError
-from robot.planning.schema import flat_plan_schema
 from robot.planning.validator import validate_plan_json
+from robot.planning.world_schema import world_plan_schema
 
 
 class ChatModel(Protocol):
@@ -63,6 +64,14 @@ def parse_plan_text(text: str) -> Any:
     raise PlanningError(f"the reply is not JSON: {snippet!r}")
 
 
+def _raise_if_cannot(plan_json: Any, name: str) -> None:
+    """A `cannot` step is the model's refusal: its reason is the answer (no repair, no plan)."""
+    steps = plan_json.get("steps") if isinstance(plan_json, dict) else plan_json
+    for step in steps if isinstance(steps, list) else ():
+        if isinstance(step, dict) and step.get("action") == CANNOT:
+            raise PlanningError(f"{name} says it cannot: {str(step.get('reason') or 'no reason given')[:200]}")
+
+
 class LLMPlanner:
     """A `Planner` over a chat model, with `max_repairs` re-asks when the plan does not validate."""
 
@@ -70,7 +79,6 @@ class LLMPlanner:
         self.model = model
         self.name = model.name
         self.max_repairs = max_repairs
-        self.schema = flat_plan_schema()
         self.last_attempts: list[Attempt] = []
 
     def describe(self) -> str:
@@ -78,10 +86,11 @@ class LLMPlanner:
 
     def plan(self, text: str, context: PlanningContext) -> Plan:
         messages = prompt.messages(text, context)
+        schema = world_plan_schema(context.world)
         attempts: list[Attempt] = []
         self.last_attempts = attempts
         for _ in range(1 + self.max_repairs):
-            answer = self.model.chat(messages, self.schema)
+            answer = self.model.chat(messages, schema)
             attempt = Attempt(answer)
             attempts.append(attempt)
             try:
@@ -89,6 +98,7 @@ class LLMPlanner:
             except PlanningError as exc:
                 attempt.errors = [str(exc)]
             else:
+                _raise_if_cannot(plan_json, self.name)
                 plan, attempt.errors = validate_plan_json(plan_json, context.world)
                 if plan is not None:
                     return plan

@@ -2,6 +2,10 @@
 
 An optional extra (`pip install .[local-llm]`): it compiles llama.cpp on install (about 3 minutes on 2 cores). Output is
 constrained by a grammar built from the plan's JSON schema, so a small model still answers in the right shape.
+
+A GGUF usually carries its chat template. One that does not (a base model, such as the Gemma 3 270M that ships in
+packages) would be prompted in llama.cpp's fallback, Llama 2's [INST] format, which its family never saw: it is
+prompted in its own family's format instead (`chat_format`, or chosen from the file's architecture).
 """
 
 from __future__ import annotations
@@ -14,6 +18,18 @@ from typing import Any
 from robot.planning.planner import PlanningError
 from robot.planning.prompt import Message
 
+# a model family (the GGUF's general.architecture) -> the chat format of its instruction-tuned models
+FAMILY_CHAT_FORMATS = {
+    "gemma": "gemma",
+    "gemma2": "gemma",
+    "gemma3": "gemma",
+    "llama": "llama-3",
+    "qwen2": "chatml",
+    "qwen3": "chatml",
+    "phi3": "chatml",
+    "mistral": "mistral-instruct",
+}
+
 
 class LocalChat:
     name = "local"
@@ -25,6 +41,7 @@ class LocalChat:
         n_threads: int | None = None,
         max_tokens: int = 512,
         timeout_s: float = 20.0,
+        chat_format: str = "",
     ) -> None:
         path = Path(model_path).expanduser()
         if not model_path or not path.is_file():
@@ -39,10 +56,21 @@ class LocalChat:
         self.max_tokens = max_tokens
         self.timeout_s = timeout_s
         self._llama = llama_cpp.Llama(model_path=str(path), n_ctx=n_ctx, n_threads=n_threads, verbose=False)
+        self.chat_format = chat_format or self._own_format()
+        if self.chat_format:
+            self._llama.chat_format = self.chat_format
         self._lock = threading.Lock()  # one generation at a time: the model holds one context
 
+    def _own_format(self) -> str:
+        """The file's own template when it has one (""), else its family's chat format, else ChatML."""
+        metadata = self._llama.metadata
+        if metadata.get("tokenizer.chat_template"):
+            return ""
+        return FAMILY_CHAT_FORMATS.get(metadata.get("general.architecture", ""), "chatml")
+
     def describe(self) -> str:
-        return f"{self.model_path.name} in-process (llama.cpp)"
+        prompted = f", {self.chat_format} chat format" if self.chat_format else ""
+        return f"{self.model_path.name} in-process (llama.cpp{prompted})"
 
     def chat(self, messages: list[Message], schema: dict[str, Any]) -> str:
         """Streams the reply so that a model that rambles is stopped at `timeout_s`, as a server's would be."""

@@ -9,7 +9,7 @@ from typing import Literal
 
 from robot.interface import Plan
 from robot.planning.context import PlanningContext
-from robot.planning.planner import Planner, PlanningError
+from robot.planning.planner import ClarificationNeeded, Planner, PlanningError
 from robot.planning.rules import RulesPlanner
 from robot.planning.validator import validate_plan
 
@@ -30,6 +30,7 @@ class PlannerConfig:
     local_model_path: str = ""
     local_threads: int | None = None
     local_timeout_s: float = 20.0
+    local_chat_format: str = ""  # for a GGUF without a chat template; "" chooses from its model family
     max_repairs: int = 1  # re-asks of an LLM whose plan does not validate, with the errors
     fallback_to_rules: bool = True
 
@@ -84,6 +85,8 @@ class PlanningPipeline:
             raise PlanningError("; ".join(notes))
         try:
             plan = self._checked(self.fallback, text, context)
+        except ClarificationNeeded:
+            raise  # a question for the operator, not a failure to explain
         except PlanningError as exc:
             raise PlanningError("; ".join([*notes, f"{self.fallback.name} fallback: {exc}"])) from exc
         notes.append(f"planned by {self.fallback.name} instead")
@@ -128,6 +131,11 @@ def build_llm_planner(config: PlannerConfig) -> Planner:
     if config.backend == "local":
         from robot.planning.local_chat import LocalChat
 
-        chat = LocalChat(config.local_model_path, n_threads=config.local_threads, timeout_s=config.local_timeout_s)
+        chat = LocalChat(
+            config.local_model_path,
+            n_threads=config.local_threads,
+            timeout_s=config.local_timeout_s,
+            chat_format=config.local_chat_format,
+        )
         return LLMPlanner(chat, config.max_repairs)
     raise PlanningError(f"unknown planner backend {config.backend!r} (known: {', '.join(BACKENDS)})")

@@ -6,24 +6,10 @@ from __future__ import annotations
 import json
 
 from robot.planning.context import PlanningContext, Turn
+from robot.planning.examples import CANNOT, example_turns
 from robot.planning.schema import ACTIONS
 
 Message = dict[str, str]
-
-_EXAMPLES = (
-    ("pick up the red mug from the kitchen counter",
-     [{"action": "navigate_to", "target": "kitchen counter"}, {"action": "detect_object", "object": "red mug"},
-      {"action": "pick_object", "object": "red mug"}, {"action": "say", "text": "I have picked up the red mug."}]),
-    ("bring the green apple to the living-room table",
-     [{"action": "navigate_to", "target": "kitchen counter"}, {"action": "detect_object", "object": "green apple"},
-      {"action": "pick_object", "object": "green apple"}, {"action": "navigate_to", "target": "living-room table"},
-      {"action": "place_object", "location": "living-room table"},
-      {"action": "say", "text": "I have put the green apple on the living-room table."}]),
-    ("go to the dock", [{"action": "navigate_to", "target": "charging dock"},
-                        {"action": "say", "text": "I am at the charging dock."}]),
-    ("what do you see", [{"action": "look_around"}, {"action": "describe_scene"}]),
-    ("stop", [{"action": "stop"}]),
-)  # fmt: skip
 
 
 def system_prompt() -> str:
@@ -42,12 +28,10 @@ def system_prompt() -> str:
         "- If the robot already holds the object, do not pick it again.",
         "- End a task with a short say step telling the operator what was done.",
         "- If asked to replan after a failure, plan only what is still needed from the robot's current state.",
+        f"- If the command names a thing or place not in the world, or asks for what no action does, reply with "
+        f'one step {{"action": "{CANNOT}", "reason": "..."}} saying why. Never plan something else instead.',
         "- Reply with the JSON object only, no explanation.",
-        "Examples:",
     ]
-    for command, steps in _EXAMPLES:
-        lines.append(f"Command: {command}")
-        lines.append(json.dumps({"steps": steps}))
     return "\n".join(lines)
 
 
@@ -92,7 +76,12 @@ def messages(command: str, context: PlanningContext) -> list[Message]:
         done = "; ".join(context.done) if context.done else "nothing"
         parts.append(f"Replanning: the last plan for this command failed: {context.failure}. Already done: {done}.")
     parts.append(f"Command: {command}")
-    return [{"role": "system", "content": system_prompt()}, {"role": "user", "content": "\n\n".join(parts)}]
+    # worked examples as earlier turns of the chat, chosen for this command and made in this world
+    return [
+        {"role": "system", "content": system_prompt()},
+        *example_turns(command, context),
+        {"role": "user", "content": "\n\n".join(parts)},
+    ]
 
 
 def repair_messages(previous: list[Message], answer: str, errors: list[str]) -> list[Message]:

@@ -1,50 +1,39 @@
-"""Deterministic, offline rule-based planner for the robot's action vocabulary.
+"""Deterministic, offline planner for commands in everyday wording.
 
-It recognises the supported intents (fetch, bring to, go to, go home, find, look around, what do you see, wait,
-stop, say) with their common paraphrases and resolves object and place names against the world, so an unknown
-name is an error, never a guess. "it" means the object in hand, else the last one the conversation named.
+A command is cut into its steps in the order they are to be done (`language.clauses`: "first ... then",
+"... after you ..."), each step is read for what it asks (`language.intents`: fetch, bring to, go to, go home,
+find, look around, what do you see, wait, stop, say; politeness and fillers cut away) and its names are looked up
+in the world (`language.names`: aliases, everyday words, colours and rooms, near misses). A name that is not in
+the world, or a request that is no ability, is refused with what the robot can do instead; two close readings
+make it ask one question (`ClarificationNeeded`), never guess.
+
+"it" is the object this command last named, else the one in hand, else the last one the conversation named.
 """
 
 from __future__ import annotations
 
 import re
+from collections.abc import Iterable
+from dataclasses import dataclass, replace
 
 from robot.interface import Plan, Step
 from robot.navigation.goal import parse_pose_goal
 from robot.planning.context import PlanningContext
-from robot.planning.planner import PlanningError
-from robot.planning.world_context import WorldContext, normalize
+from robot.planning.language.clauses import split_command
+from robot.planning.language.intents import Step as Request
+from robot.planning.language.intents import elliptic_step, read_step
+from robot.planning.language.lexicon import NUMBER_WORDS, OBJECT_PRONOUNS, PLACE_PRONOUNS
+from robot.planning.language.names import QUESTION_START, WorldNames
+from robot.planning.planner import ClarificationNeeded, PlanningError
 
-_PICK = r"(?:pick up|pick|grab|take|get|fetch|grasp|lift|collect|retrieve)"
-_BRING = r"(?:bring|carry|deliver|move|take|put|place|set|drop|leave|bring back|take back)"
-_GO = r"(?:go|navigate|walk|move|head|drive|return|come|proceed|travel)"
-_FIND = r"(?:find|look for|search for|detect|locate|where is|where s|spot|can you see|do you see|is there)"
-_ARTICLE = r"(?:the |a |an |my |your |that |this |some )?"
-_PRONOUNS = ("it", "that", "this", "that one", "this one", "the object", "them")
-_POLITE = r"^(?:please |robot |hey robot |ok robot |okay robot |now |can you |could you |would you |will you |go and )+"
-# what `wait` understands, and what speech recognition listens for
-NUMBER_WORDS = {"one": 1, "two": 2, "three": 3, "four": 4, "five": 5, "six": 6, "seven": 7, "eight": 8,
-                "nine": 9, "ten": 10, "fifteen": 15, "twenty": 20, "thirty": 30, "a few": 3,
-                "a couple of": 2}  # fmt: skip
-_STOP = re.compile(
-    r"(?:please )?(?:stop|halt|freeze|stand still|stop moving|stop now|cancel|abort|stop everything|"
-    r"emergency stop|stop what you are doing|stop it)(?: please| now)?"
-)
-_WHAT_DO_YOU_SEE = re.compile(
-    r"(?:what|which objects|what things) (?:do|can) you see(?: around you| here)?|what is around(?: you)?|"
-    r"what s around(?: you)?|describe (?:the scene|what you see|your surroundings)|tell me what you see|"
-    r"report what you see|what have you seen"
-)
-
-EXAMPLES = (
-    "'pick up the red mug from the kitchen counter', 'bring the red mug to the living-room table', "
-    "'go to the charging dock', 'find the green apple', 'what do you see', 'go home', 'wait 5 seconds', 'stop' "
-    "or 'say hello'"
-)
+__all__ = ["NUMBER_WORDS", "RulesPlanner"]
 
 
 class RulesPlanner:
     name = "rules"
+
+    def __init__(self) -> None:
+        _read("go home, then say hello")  # builds the verb tables and patterns now (~0.3 s), not on a command
 
     def describe(self) -> str:
         return "built-in rules (offline)"
@@ -53,151 +42,242 @@ class RulesPlanner:
         raw = text.strip()
         if not raw:
             raise PlanningError("empty command")
-        world = context.world
-        said = re.match(r"^\s*(?:please\s+)?(?:say|speak|tell me|announce)\s*[:,]?\s+(.+)$", raw, re.IGNORECASE)
-        if said and normalize(said.group(1)) not in ("what you see", "what do you see", "what you can see"):
-            return Plan((Step("say", {"text": said.group(1).strip().strip("\"'")}),))
+        return self._answer(raw, context) or self._plan(raw, context)
 
-        # "go to 1.2, 0.5", "walk to (1.2, 0.5, 90 deg)": a pose on the map (punctuation matters here)
-        m = re.match(rf"^\s*(?:please\s+)?{_GO}\s+(?:to\s+)?(.+)$", raw, re.IGNORECASE)
-        pose = parse_pose_goal(m.group(1)) if m else None
-        if pose is not None:
-            return Plan((Step("navigate_to", {"target": pose.text()}),
-                         Step("say", {"text": f"I am at {pose.text()}."})))  # fmt: skip
-
-        t = normalize(raw)
-        if _STOP.fullmatch(t):
+    def _plan(self, raw: str, context: PlanningContext, chosen: frozenset[str] = frozenset()) -> Plan:
+        requests = _read(raw)
+        if not requests:
+            raise PlanningError(f"I don't understand {raw!r}. {self.abilities(context)}")
+        if all(r.action == "stop" for r in requests):
             return Plan((Step("stop", {}),))
-        t = re.sub(_POLITE, "", t)
-        t = re.sub(r" (?:please|for me|now|right now|thanks|thank you)$", "", t)
+        return _Composer(context, raw, self.abilities(context), chosen).compose(requests)
 
-        plan = self._simple_intent(t, world)
-        if plan is not None:
-            return plan
+    def _answer(self, raw: str, context: PlanningContext) -> Plan | None:
+        """ "the red mug", said after "Did you mean the red mug or the blue bottle?": the command that was asked
+        about, with that reading."""
+        asked = context.history[-1] if context.history else None
+        if asked is None or not asked.outcome.startswith(f"refused: {QUESTION_START}"):
+            return None
+        requests = [r for r in _read(raw) if r.action not in ("nothing", "chatter")]
+        if len(requests) != 1 or requests[0].action != "topic":
+            return None
+        chosen = WorldNames(context.world).name_of(requests[0].thing or "")
+        if chosen is None:
+            return None
+        try:
+            return self._plan(asked.command, replace(context, history=context.history[:-1]), frozenset({chosen}))
+        except PlanningError:
+            return None
 
-        # "bring the red mug to the living-room table", "put the apple on the table", "put it on the table"
-        m = re.match(
-            rf"^{_BRING} {_ARTICLE}(.+?)(?: (?:from|off) {_ARTICLE}(.+?))?(?: back| over| down)? "
-            rf"(?:to|onto|on|into|in|at|over to|on to|back to|down on) {_ARTICLE}(.+)$",
-            t,
-        )
-        if m:
-            obj = self._object(m.group(1), context)
-            destination = m.group(3)
-            if destination in ("me", "here", "us", "me here"):
-                return self._fetch(obj, m.group(2), world, then_say=f"Here is the {obj}.")
-            place = self._place(destination, world)
-            return self._carry(obj, m.group(2), place, world)
-
-        # "bring the apple here", "bring it over here"
-        m = re.match(rf"^(?:bring|fetch|get|carry) {_ARTICLE}(.+?) (?:over )?here$", t)
-        if m:
-            obj = self._object(m.group(1), context)
-            return self._fetch(obj, None, world, then_say=f"Here is the {obj}.")
-
-        # "bring me the apple", "i want the mug", "can i have the bottle"
-        m = re.match(
-            rf"^(?:(?:bring|fetch|get|hand|give|pass) me|i want|i need|i would like|i d like|can i have|may i have)"
-            rf" {_ARTICLE}(.+?)(?: (?:from|off) {_ARTICLE}(.+))?$",
-            t,
-        )
-        if m:
-            obj = self._object(m.group(1), context)
-            return self._fetch(obj, m.group(2), world, then_say=f"Here is the {obj}.")
-
-        # "pick up the red mug from the kitchen counter", "grab the red cup off the counter"
-        m = re.match(rf"^{_PICK}(?: up)? {_ARTICLE}(.+?)(?: (?:up )?(?:from|off|on|at) {_ARTICLE}(.+))?(?: up)?$", t)
-        if m:
-            obj = self._object(m.group(1), context)
-            return self._fetch(obj, m.group(2), world, then_say=f"I have picked up the {obj}.")
-
-        # "go to the dock", "head over to the kitchen", "walk to the mug"
-        m = re.match(rf"^{_GO}(?: back| over)? (?:to|towards|over to|into|in to) {_ARTICLE}(.+)$", t)
-        if m:
-            target = world.resolve_place(m.group(1))
-            thing = world.resolve_object(m.group(1)) if target is None else None
-            if thing is not None:
-                target = self._source(thing, None, world)
-            if target is None:
-                raise PlanningError(f"unknown place {m.group(1)!r}; known places: {', '.join(world.places)}")
-            return Plan((Step("navigate_to", {"target": target}), Step("say", {"text": f"I am at the {target}."})))
-
-        # "find the apple", "where is the bottle", "look for the mug"
-        m = re.match(rf"^{_FIND} {_ARTICLE}(.+?)(?: anywhere| around| here)?$", t)
-        if m:
-            return Plan((Step("detect_object", {"object": self._object(m.group(1), context)}),))
-
-        raise PlanningError(f"I don't understand {raw!r}. Try e.g. {EXAMPLES}.")
-
-    # --- intents without objects --------------------------------------------------------------------------------
-
-    def _simple_intent(self, t: str, world: WorldContext) -> Plan | None:
-        if _WHAT_DO_YOU_SEE.fullmatch(t):
-            return Plan((Step("look_around", {}), Step("describe_scene", {})))
-        if re.fullmatch(r"(?:look around|have a look around|scan the room|scan around|look about)", t):
-            return Plan((Step("look_around", {}),))
-        if re.fullmatch(r"(?:go|return|walk|head|come)(?: back)? (?:home|to your start|to where you started|"
-                        r"to the start|to your starting (?:point|position)|to base)|home|go home", t):  # fmt: skip
-            return Plan((Step("go_home", {}), Step("say", {"text": "I am back where I started."})))
-        m = re.fullmatch(r"(?:wait|pause|hold on|stay(?: still| there| here)?|stand by)(?: for)? (.+?)"
-                         r" ?(?:seconds|second|secs|sec|s)", t)  # fmt: skip
-        if m:
-            seconds = _number(m.group(1))
-            if seconds is None:
-                raise PlanningError(f"how long is {m.group(1)!r} seconds?")
-            return Plan((Step("wait", {"seconds": f"{seconds:g}"}),))
-        return None
-
-    # --- helpers --------------------------------------------------------------------------------------------
-
-    def _object(self, phrase: str, context: PlanningContext) -> str:
+    @staticmethod
+    def abilities(context: PlanningContext) -> str:
+        """What the robot can do, said when it cannot do what it was asked."""
         world = context.world
-        if phrase in _PRONOUNS:
-            name = world.held_object or _last_object(context)
+        return (
+            f"I can fetch or carry {_any_of(f'the {o}' for o in world.objects)}; go to "
+            f"{_any_of([*(f'the {p}' for p in world.places), 'home'])}; find things; look around and tell what I "
+            "see; say something; wait; stop."
+        )
+
+
+def _read(raw: str) -> list[Request]:
+    """The command's requests in order; a piece that is no request is refused, unless it continues a message
+    ("say hello, world") or names a thing for a pronoun after it ("the red mug, bring it to the table")."""
+    requests: list[Request] = []
+    for whole in split_command(raw):
+        previous = requests[-1] if requests else None
+        if previous is not None and previous.open_message:  # "announce: dinner is ready"
+            start = whole.words[0].start
+            requests[-1] = Request("say", text=raw[start : whole.words[-1].end], text_start=start)
+            continue
+        clause = whole.without_prefixes()
+        if not clause.without_suffixes().words:
+            continue  # "thanks", "robot": nothing asked
+        request = read_step(clause)
+        if request is None and previous is not None:
+            request = elliptic_step(clause.without_suffixes(), previous)
+        if request is None and previous is not None and previous.action == "say":  # "say hello, world"
+            start = previous.text_start
+            requests[-1] = Request("say", text=raw[start : whole.words[-1].end], text_start=start)
+            continue
+        if request is None:
+            text = clause.without_suffixes().text
+            request = Request("chatter" if _STATEMENT.match(text) else "topic", thing=text)
+        requests.append(request)
+    return requests
+
+
+# "I'm thirsty, ...", "it's late, ...": said about things, not asked of the robot
+_STATEMENT = re.compile(
+    r"(?:i|we|it|this|that|there|he|she|they) (?:am|are|is|was|were|think|feel|guess|have|had|got|will|would|"
+    r"just|really|do not|did not|cannot|can not)\b"
+)
+
+
+@dataclass
+class _Said:
+    """The steps one request became, and what the robot says when it is the last."""
+
+    steps: list[Step]
+    confirmation: str | None = None
+
+
+class _Composer:
+    """Turns requests into one plan, keeping track of what the robot will hold and what was last named."""
+
+    def __init__(self, context: PlanningContext, raw: str, abilities: str, chosen: frozenset[str]) -> None:
+        self.world = context.world
+        self.names = WorldNames(context.world, chosen)
+        self.raw = raw
+        self.abilities = abilities
+        self.held = context.world.held_object
+        self.last_object: str | None = None  # named in this command
+        self.earlier_object = _last_object(context)  # named earlier in the conversation
+        self.last_place: str | None = None
+
+    def compose(self, requests: list[Request]) -> Plan:
+        requests = [r for r in requests if r.action not in ("nothing", "chatter")]
+        if len(requests) == 1 and requests[0].action == "topic" and self._names_an_object(requests[0].thing):
+            requests = [Request("fetch", thing=requests[0].thing, to_me=True)]  # "the red mug, please"
+        parts: list[_Said] = []
+        for i, request in enumerate(requests):
+            if request.action == "stop" and i > 0:
+                continue  # "go to the dock and stop there": the stop is where the step ends
+            if request.action == "topic":
+                if i == len(requests) - 1:
+                    raise PlanningError(f"I don't understand {self.raw!r}. {self.abilities}")
+                self._topic(request.thing or "")
+                continue
+            parts.append(self._steps(request))
+        steps: list[Step] = []
+        for i, part in enumerate(parts):
+            said = part.steps
+            if i == len(parts) - 1 and part.confirmation:
+                said = [*said, Step("say", {"text": part.confirmation})]
+            for step in said:
+                if not steps or steps[-1] != step:  # already there: walking there again is no step
+                    steps.append(step)
+        if not steps:
+            raise PlanningError(f"I don't understand {self.raw!r}. {self.abilities}")
+        return Plan(tuple(steps))
+
+    def _steps(self, request: Request) -> _Said:
+        action = request.action
+        if action == "fetch":
+            obj, source = self._object(request)
+            then = f"Here is the {obj}." if request.to_me else f"I have picked up the {obj}."
+            return _Said(self._fetch(obj, source), then)
+        if action == "carry":
+            obj, source = self._object(request)
+            place = self._place(request.place or "")
+            steps = [
+                *self._fetch(obj, source),
+                Step("navigate_to", {"target": place}),
+                Step("place_object", {"location": place}),
+            ]
+            self.held, self.last_place = None, place
+            return _Said(steps, f"I have put the {obj} on the {place}.")
+        if action == "go":
+            target = self._target(request.place or "")
+            return _Said([Step("navigate_to", {"target": target})], f"I am at {_the(target)}.")
+        if action == "find":
+            obj, _ = self._object(request)
+            return _Said([Step("detect_object", {"object": obj})])
+        if action == "say":
+            if not request.text.strip():
+                raise PlanningError("say what? e.g. 'say hello' or 'announce: dinner is ready'")
+            return _Said([Step("say", {"text": request.text.strip().strip("\"'").strip()})])
+        simple = {
+            "look": _Said([Step("look_around", {})]),
+            "look_and_tell": _Said([Step("look_around", {}), Step("describe_scene", {})]),
+            "home": _Said([Step("go_home", {})], "I am back where I started."),
+            "stop": _Said([Step("stop", {})]),
+        }
+        if action == "wait":
+            return _Said([Step("wait", {"seconds": f"{request.seconds:g}"})])
+        return simple[action]
+
+    # --- names -----------------------------------------------------------------------------------------------
+
+    def _object(self, request: Request) -> tuple[str, str | None]:
+        phrase = (request.thing or "").strip()
+        if phrase in OBJECT_PRONOUNS:
+            name = self.last_object or self.held or self.earlier_object
             if name is None:
                 raise PlanningError(f"which object is {phrase!r}? name it, e.g. 'the red mug'")
-            return name
-        name = world.resolve_object(phrase)
-        if name is None:
-            raise PlanningError(f"unknown object {phrase!r}; known objects: {', '.join(world.objects)}")
-        return name
+            source = None
+        else:
+            reference = self.names.object(phrase)
+            name, source = reference.name, reference.source
+        if request.source:
+            source = self._place(request.source)
+        self.last_object = name
+        return name, source
 
-    def _place(self, phrase: str, world: WorldContext) -> str:
-        name = world.resolve_place(phrase)
-        if name is None:
-            raise PlanningError(f"unknown place {phrase!r}; known places: {', '.join(world.places)}")
-        return name
+    def _place(self, phrase: str) -> str:
+        if phrase.strip() in (*PLACE_PRONOUNS, *OBJECT_PRONOUNS) and self.last_place is not None:
+            return self.last_place  # "the table: put the apple on it"
+        place = self.names.place(phrase)
+        self.last_place = place
+        return place
 
-    def _source(self, obj: str, source_phrase: str | None, world: WorldContext) -> str:
-        believed = world.object_locations.get(obj)
-        if source_phrase is None:
-            if believed is None:
-                raise PlanningError(f"I don't know where the {obj} is; say where to pick it from")
-            return believed
-        return self._place(source_phrase, world)
+    def _target(self, phrase: str) -> str:
+        pose = parse_pose_goal(phrase)
+        if pose is not None:
+            return pose.text()
+        if phrase.strip().lower() in PLACE_PRONOUNS and self.last_place is not None:
+            return self.last_place
+        target = self.names.target(phrase)
+        self.last_place = target
+        return target
 
-    def _fetch(self, obj: str, source_phrase: str | None, world: WorldContext, then_say: str | None) -> Plan:
-        steps: list[Step] = []
-        if world.held_object is not None and world.held_object != obj:
-            raise PlanningError(f"the robot is holding the {world.held_object}: put it down first")
-        if world.held_object != obj:
-            source = self._source(obj, source_phrase, world)
-            steps += [
-                Step("navigate_to", {"target": source}),
-                Step("detect_object", {"object": obj}),
-                Step("pick_object", {"object": obj}),
-            ]
-        steps.append(Step("say", {"text": then_say or f"Here is the {obj}."}))
-        return Plan(tuple(steps))
+    def _names_an_object(self, phrase: str | None) -> bool:
+        try:
+            self.names.object(phrase or "")
+        except ClarificationNeeded:
+            return True  # it names things: the question will be asked
+        except PlanningError:
+            return False
+        return True
 
-    def _carry(self, obj: str, source_phrase: str | None, place: str, world: WorldContext) -> Plan:
-        steps = list(self._fetch(obj, source_phrase, world, then_say=None).steps[:-1])
-        steps += [
-            Step("navigate_to", {"target": place}),
-            Step("place_object", {"location": place}),
-            Step("say", {"text": f"I have put the {obj} on the {place}."}),
+    def _topic(self, phrase: str) -> None:
+        """A thing named on its own before the request about it ("the red mug, bring it to the table")."""
+        try:
+            reference = self.names.object(phrase)
+        except PlanningError as not_an_object:
+            try:
+                self.last_place = self.names.place(phrase)
+            except PlanningError:
+                raise not_an_object from None
+            return
+        self.last_object = reference.name
+
+    # --- steps -----------------------------------------------------------------------------------------------
+
+    def _fetch(self, obj: str, source: str | None) -> list[Step]:
+        if self.held is not None and self.held != obj:
+            raise PlanningError(f"the robot is holding the {self.held}: put it down first")
+        if self.held == obj:
+            return []
+        where = source or self.world.object_locations.get(obj)
+        if where is None:
+            raise PlanningError(f"I don't know where the {obj} is; say where to pick it from")
+        self.held = obj
+        return [
+            Step("navigate_to", {"target": where}),
+            Step("detect_object", {"object": obj}),
+            Step("pick_object", {"object": obj}),
         ]
-        return Plan(tuple(steps))
+
+
+def _any_of(items: Iterable[str]) -> str:
+    """'the red mug, the blue bottle or the green apple'."""
+    listed = list(items)
+    return ", ".join(listed[:-1]) + f" or {listed[-1]}" if len(listed) > 1 else "".join(listed)
+
+
+def _the(target: str) -> str:
+    return target if target[:1].isdigit() or target[:1] == "-" else f"the {target}"
 
 
 def _last_object(context: PlanningContext) -> str | None:
@@ -209,13 +289,3 @@ def _last_object(context: PlanningContext) -> str | None:
             if "object" in step.args:
                 return step.args["object"]
     return None
-
-
-def _number(text: str) -> float | None:
-    text = text.strip()
-    if text in NUMBER_WORDS:
-        return float(NUMBER_WORDS[text])
-    try:
-        return float(text)
-    except ValueError:
-        return None

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from robot.interface import KnownObject
 from robot.model.world import WorldLayout
@@ -21,6 +21,11 @@ class WorldContext:
     object_locations: dict[str, str]  # object -> place where it is believed to be
     held_object: str | None = None
     known_objects: tuple[KnownObject, ...] = ()  # what perception has seen, and where
+    # how people may describe them: an object's colour and shape ("the red cup"), the room a place is in ("the
+    # table in the living room"); empty when unknown
+    object_colors: dict[str, str] = field(default_factory=dict)
+    object_shapes: dict[str, str] = field(default_factory=dict)
+    place_rooms: dict[str, str] = field(default_factory=dict)
 
     @staticmethod
     def from_layout(
@@ -38,6 +43,9 @@ class WorldContext:
             object_locations=locations,
             held_object=held_object,
             known_objects=known_objects,
+            object_colors={o.name: o.color for o in layout.objects},
+            object_shapes={o.name: o.shape for o in layout.objects},
+            place_rooms={p.name: p.room for p in layout.places},
         )
 
     def resolve_place(self, name: str) -> str | None:

@@ -141,6 +141,13 @@ function showResult(text, isError) {
   el.textContent = text;
   el.className = "result " + (isError ? "error" : "ok");
 }
+// Two readings were close: the planner asks instead of acting. The answer is typed next ("the red mug").
+function showQuestion(question) {
+  const el = $("command-result");
+  el.textContent = question;
+  el.className = "result question";
+  $("command-text").focus();
+}
 
 function describeError(detail) {
   if (typeof detail === "string") return detail;
@@ -161,6 +168,7 @@ $("command-form").addEventListener("submit", async (ev) => {
   const text = $("command-text").value.trim();
   if (!text) return showResult("type a command first", true);
   const { ok, data } = await post("/api/commands", { text, source: "typed" });
+  if (!ok && data.detail && data.detail.clarify) return showQuestion(data.detail.clarify);
   showResult(ok ? `accepted: ${data.message}` : describeError(data.detail), !ok);
 });
 $("replan").addEventListener("click", async () => {

@@ -52,6 +52,22 @@ def test_command_is_planned_and_executed(client) -> None:
     assert plan["steps"][0]["state"] == "succeeded"
 
 
+def test_a_command_with_two_close_readings_gets_a_question_not_a_plan(client) -> None:
+    before = plan_state(client)
+    response = client.post("/api/commands", json={"text": "could you bring me the blue mug"})
+    assert response.status_code == 422
+    detail = response.json()["detail"]
+    assert detail["clarify"] == "Did you mean the red mug or the blue bottle?" and detail["plan"] is None
+    assert plan_state(client) == before
+    answered = client.post("/api/commands", json={"text": "the red one"})  # the answer: that command, so read
+    assert answered.status_code == 202
+    assert [s["args"] for s in answered.json()["plan"]["steps"]][2] == {"object": "red mug"}
+    client.post("/api/plan/cancel")
+    accepted = client.post("/api/commands", json={"text": "hey robot, tell everyone that the tea is ready"})
+    assert accepted.status_code == 202 and accepted.json()["clarify"] is None
+    assert accepted.json()["plan"]["steps"] == [{"action": "say", "args": {"text": "the tea is ready"}}]
+
+
 def test_a_step_the_robot_cannot_do_is_reported_not_faked(client) -> None:
     steps = [{"action": "pick_object", "args": {"object": "red mug"}}, {"action": "say", "args": {"text": "got it"}}]
     assert client.post("/api/commands", json={"plan": {"steps": steps}}).status_code == 202

@@ -111,6 +111,24 @@ def test_plan_prints_the_validated_plan_in_the_seeds_format_without_moving_anyth
     assert [s["action"] for s in json.loads(holding.stdout)] == ["navigate_to", "place_object", "say"]
     unknown = humanoid(tmp_path, "plan", "pick up the purple elephant", "--json")
     assert unknown.returncode == 1 and "unknown object 'purple elephant'" in unknown.stderr and unknown.stdout == ""
+    asked = humanoid(tmp_path, "plan", "go to the kitchen table", "--json")
+    assert asked.returncode == 1 and json.loads(asked.stdout) == {
+        "clarify": "Did you mean the living-room table or the kitchen counter?",
+        "options": ["living-room table", "kitchen counter"],
+        "plan": None,
+    }
+
+
+def test_bench_language_reports_both_sets_against_the_bars(tmp_path) -> None:
+    out = tmp_path / "language.json"
+    done = humanoid(tmp_path, "bench", "language", "--output", str(out))
+    assert done.returncode == 0, done.stderr
+    result = json.loads(out.read_text())
+    assert set(result["typed"]) == {"dev", "heldout"} and result["spoken"]["measured"] is False
+    for figures in (result["typed"]["dev"]["rules"], result["typed"]["heldout"]["rules"]):
+        assert figures["everyday_right"]["of"] >= 60 and figures["out_of_world_right"]["of"] >= 20
+        assert set(figures["latency_ms"]) == {"p50", "p99", "max"}
+    assert len(result["bars"]) == 6 and all(bar["met"] for bar in result["bars"].values()), result["bars"]
 
 
 def test_plan_with_an_unreachable_llm_falls_back_to_rules_and_says_why(tmp_path) -> None:

@@ -75,6 +75,11 @@ def test_typed_command_runs_and_the_plan_shows_per_step_status(page) -> None:
     page.click("#send")
     expect(page.locator("#command-result")).to_contain_text("unknown object 'purple elephant'")
 
+    page.fill("#command-text", "bring me the blue mug")  # two close readings: a question, not a plan
+    page.click("#send")
+    expect(page.locator("#command-result")).to_have_text("Did you mean the red mug or the blue bottle?")
+    expect(page.locator("#command-result")).to_have_class("result question")
+
 
 def test_an_operator_approves_edits_and_pauses_plans_from_the_page(page) -> None:
     expect = playwright_api.expect

@@ -15,6 +15,7 @@ import subprocess
 import sys
 import time
 from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 
 import httpx
@@ -29,6 +30,7 @@ from robot.planning.pipeline import PlannerConfig, build_pipeline
 from robot.planning.planner import PlanningError
 from robot.planning.schema import ACTIONS, flat_plan_schema
 from robot.planning.world_context import WorldContext
+from robot.planning.world_schema import world_plan_schema
 
 pytestmark = pytest.mark.slow
 
@@ -59,18 +61,41 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
+@dataclass(frozen=True)
+class LlamaServer:
+    url: str
+    log: Path  # what the server prints: it says when a client hangs up mid-reply
+
+
 @pytest.fixture(scope="module")
-def server(model_path: Path, tmp_path_factory) -> Iterator[str]:
+def llama_server(model_path: Path, tmp_path_factory) -> Iterator[LlamaServer]:
     _require("llama_cpp.server")
     port = _free_port()
     log = (tmp_path_factory.mktemp("llama") / "server.log").open("w")
     process = subprocess.Popen(
-        [sys.executable, "-m", "llama_cpp.server", "--model", str(model_path), "--host", "127.0.0.1",
-         "--port", str(port), "--n_ctx", "4096", "--n_threads", "2"],
-        stdout=log, stderr=subprocess.STDOUT,
+        # the GGUF is a base model without a chat template: the server is told its family's chat format
+        [
+            sys.executable,
+            "-m",
+            "llama_cpp.server",
+            "--model",
+            str(model_path),
+            "--host",
+            "127.0.0.1",
+            "--port",
+            str(port),
+            "--n_ctx",
+            "4096",
+            "--n_threads",
+            "2",
+            "--chat_format",
+            "gemma",
+        ],
+        stdout=log,
+        stderr=subprocess.STDOUT,
         # its settings read HOST and PORT from the environment over its own options, and `make` exports ours
-        env={k: v for k, v in os.environ.items() if k not in ("HOST", "PORT")},
-    )  # fmt: skip
+        env={**{k: v for k, v in os.environ.items() if k not in ("HOST", "PORT")}, "PYTHONUNBUFFERED": "1"},
+    )
     url = f"http://127.0.0.1:{port}/v1"
     deadline = time.monotonic() + SERVER_START_TIMEOUT_S
     while True:
@@ -83,13 +108,18 @@ def server(model_path: Path, tmp_path_factory) -> Iterator[str]:
             process.kill()
             raise AssertionError(f"llama.cpp's server did not start: {Path(log.name).read_text()[-2000:]}")
         time.sleep(0.5)
-    yield url
+    yield LlamaServer(url, Path(log.name))
     process.terminate()
     try:
         process.wait(timeout=10)
     except subprocess.TimeoutExpired:
         process.kill()
     log.close()
+
+
+@pytest.fixture(scope="module")
+def server(llama_server: LlamaServer) -> str:
+    return llama_server.url
 
 
 @pytest.fixture
@@ -101,19 +131,34 @@ COMMANDS = ("pick up the red mug from the kitchen counter", "go to the charging 
 
 
 @pytest.mark.parametrize("text", COMMANDS)
-def test_the_servers_replies_follow_the_plan_schema(server: str, context, text: str) -> None:
+def test_the_servers_replies_follow_the_worlds_plan_schema(server: str, context, text: str) -> None:
     chat = OpenAIChat(server, "gemma-3-270m", timeout_s=60)
-    answer = chat.chat(prompt.messages(text, context), flat_plan_schema(max_steps=8))
-    plan = parse_plan_text(answer)
-    jsonschema.validate(plan, flat_plan_schema(max_steps=8))
-    assert all(step["action"] in ACTIONS for step in plan["steps"])
-    # llama.cpp's server takes a schema in json_object, not json_schema: auto found out and remembers it
+    schema = world_plan_schema(context.world, max_steps=8)
+    plan = parse_plan_text(chat.chat(prompt.messages(text, context), schema))
+    jsonschema.validate(plan, schema)  # only the world's names, every argument an action needs, or "cannot"
+    assert all(step["action"] in (*ACTIONS, "cannot") for step in plan["steps"])
+    # llama.cpp's server takes a schema in json_object, not json_schema: auto found out, and every client of
+    # this server asks that way from now on
     assert chat.response_format in ("json_schema", "json_object")
+    assert OpenAIChat(server, "gemma-3-270m").response_format == chat.response_format
+
+
+def test_a_reply_cut_at_the_deadline_stops_the_generation_on_the_server(llama_server: LlamaServer, context) -> None:
+    chat = OpenAIChat(llama_server.url, "gemma-3-270m", timeout_s=1.0, response_format="json_object")
+    chat.max_tokens = 2000  # more than it can say in a second on these cores
+    # the prompt takes longer than that to read: the deadline first falls on the wait for the first word
+    with pytest.raises(PlanningError, match=r"timed out after 1 s"):
+        chat.chat(prompt.messages("bring the red mug to the living-room table", context), flat_plan_schema())
+    deadline = time.monotonic() + 60.0
+    while "Disconnected from client" not in llama_server.log.read_text():
+        assert time.monotonic() < deadline, "the server went on generating for a client that had given up"
+        time.sleep(0.2)
 
 
 def test_the_openai_backend_always_ends_with_a_valid_plan_or_a_reason(server: str, context) -> None:
-    pipeline = build_pipeline(PlannerConfig(backend="openai", openai_base_url=server, openai_model="gemma-3-270m",
-                                            openai_timeout_s=60))  # fmt: skip
+    pipeline = build_pipeline(
+        PlannerConfig(backend="openai", openai_base_url=server, openai_model="gemma-3-270m", openai_timeout_s=60)
+    )
     for text in COMMANDS:
         result = pipeline.plan(text, context)
         assert result.backend == "openai" and result.attempts >= 1
@@ -125,8 +170,9 @@ def test_the_openai_backend_always_ends_with_a_valid_plan_or_a_reason(server: st
 
 
 def test_an_impossible_command_fails_with_both_reasons(server: str, context) -> None:
-    pipeline = build_pipeline(PlannerConfig(backend="openai", openai_base_url=server, openai_model="gemma-3-270m",
-                                            openai_timeout_s=60))  # fmt: skip
+    pipeline = build_pipeline(
+        PlannerConfig(backend="openai", openai_base_url=server, openai_model="gemma-3-270m", openai_timeout_s=60)
+    )
     try:
         result = pipeline.plan("pick up the purple elephant", context)
     except PlanningError as exc:
@@ -135,10 +181,22 @@ def test_an_impossible_command_fails_with_both_reasons(server: str, context) -> 
         assert "elephant" not in json.dumps(result.plan.to_seed_list())
 
 
+def test_a_gguf_without_a_chat_template_is_prompted_in_its_familys_format(model_path: Path) -> None:
+    _require("llama_cpp")
+    from robot.planning.local_chat import LocalChat
+
+    chat = LocalChat(str(model_path), n_ctx=512, n_threads=2)
+    assert "tokenizer.chat_template" not in chat._llama.metadata  # the packaged Gemma 3 270M is a base model
+    assert chat.chat_format == "gemma" and chat._llama.chat_format == "gemma"  # not llama.cpp's Llama 2 fallback
+    assert LocalChat(str(model_path), n_ctx=512, n_threads=2, chat_format="chatml").chat_format == "chatml"
+
+
 def test_the_local_backend_runs_the_same_model_in_process(model_path: Path, context) -> None:
     _require("llama_cpp")
     pipeline = build_pipeline(PlannerConfig(backend="local", local_model_path=str(model_path), local_threads=2))
     assert pipeline.primary is not None, pipeline.unavailable
+    # the GGUF carries no chat template: it is prompted in its family's format, not llama.cpp's Llama 2 fallback
+    assert pipeline.primary.model.chat_format == "gemma" and "gemma chat format" in pipeline.describe()
     answer = pipeline.primary.model.chat(prompt.messages("go to the charging dock", context), flat_plan_schema())
     jsonschema.validate(parse_plan_text(answer), flat_plan_schema())
     result = pipeline.plan("go to the charging dock", context)

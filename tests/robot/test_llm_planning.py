@@ -15,6 +15,7 @@ from robot.planning.llm import LLMPlanner, parse_plan_text
 from robot.planning.pipeline import PlannerConfig, PlanningPipeline, build_pipeline
 from robot.planning.planner import PlanningError
 from robot.planning.rules import RulesPlanner
+from robot.planning.validator import validate_plan_json
 from robot.planning.world_context import WorldContext
 
 FETCH = [
@@ -129,12 +130,57 @@ def test_the_prompt_carries_the_world_the_conversation_and_the_failure(layout) -
                               done=("navigate_to(kitchen counter)",))  # fmt: skip
     messages = prompt.messages("pick up the red mug", context)
     assert messages[0]["role"] == "system" and "look_around" in messages[0]["content"]
-    user = messages[1]["content"]
+    assert messages[-1]["role"] == "user"
+    user = messages[-1]["content"]
     assert "red mug (also: mug, cup, red cup, coffee mug), on the kitchen counter (seen at x 1.64" in user
     assert "living-room table" in user and "the robot holds: nothing" in user
     assert '\'find the apple\': [{"action": "detect_object", "object": "green apple"}] -> succeeded' in user
     assert "grasp slipped" in user and "Already done: navigate_to(kitchen counter)" in user
     assert user.endswith("Command: pick up the red mug")
+
+
+def test_worked_examples_are_earlier_chat_turns_chosen_for_the_command_and_valid_in_this_world(context) -> None:
+    messages = prompt.messages("could you grab the water bottle for me", context)
+    examples = messages[1:-1]
+    assert [m["role"] for m in examples] == ["user", "assistant"] * (len(examples) // 2) and len(examples) >= 4
+    for asked, answered in zip(examples[::2], examples[1::2], strict=True):
+        steps = json.loads(answered["content"])["steps"]
+        if steps[0]["action"] == "cannot":  # one example of saying no, with the reason
+            assert steps[0]["reason"] and len(steps) == 1
+            continue
+        assert validate_plan_json(steps, context.world)[1] == [], asked
+    assert "pick_object" in examples[-1]["content"]  # the closest example is a fetch, next to the command
+    go_home = prompt.messages("head back to where you started", context)[1:-1]
+    assert '"go_home"' in go_home[-1]["content"]
+
+
+def test_a_cannot_step_is_the_models_refusal_with_its_reason(context) -> None:
+    model = ScriptedModel(json.dumps({"steps": [{"action": "cannot", "reason": "there is no banana here"}]}))
+    planner = LLMPlanner(model, max_repairs=1)
+    with pytest.raises(PlanningError, match="openai says it cannot: there is no banana here"):
+        planner.plan("bring me the banana", context)
+    assert len(model.asked) == 1  # a refusal is an answer, not an error to repair
+
+
+def test_the_schema_asked_of_a_model_is_the_worlds(context) -> None:
+    import jsonschema
+
+    from robot.planning.world_schema import world_plan_schema
+
+    schema = world_plan_schema(context.world)
+    validator = jsonschema.Draft202012Validator(schema)
+    assert validator.is_valid({"steps": FETCH})
+    assert validator.is_valid({"steps": [{"action": "navigate_to", "target": "1.20, -0.50, 90 deg"}]})
+    assert validator.is_valid({"steps": [{"action": "cannot", "reason": "there is no banana here"}]})
+    for wrong in (
+        {"action": "pick_object", "object": "banana"},  # not in this world
+        {"action": "navigate_to", "target": "garage"},
+        {"action": "place_object"},  # its argument left out
+        {"action": "say", "text": "hi", "object": "red mug"},  # an argument it does not take
+        {"action": "wait", "seconds": 600},
+        {"action": "fly"},
+    ):
+        assert not validator.is_valid({"steps": [wrong]}), wrong
 
 
 def test_memory_keeps_the_newest_turns_with_their_plans_and_outcomes() -> None:

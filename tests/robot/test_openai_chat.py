@@ -22,30 +22,65 @@ Responder = Callable[[dict[str, Any]], tuple[int, dict[str, Any]]]
 
 def completion(content: str) -> dict[str, Any]:
     return {
-        "id": "x", "object": "chat.completion", "created": 0, "model": "m",
+        "id": "x",
+        "object": "chat.completion",
+        "created": 0,
+        "model": "m",
         "choices": [{"index": 0, "finish_reason": "stop", "message": {"role": "assistant", "content": content}}],
-    }  # fmt: skip
+    }
+
+
+def chunk(content: str) -> dict[str, Any]:
+    return {
+        "id": "x",
+        "object": "chat.completion.chunk",
+        "created": 0,
+        "model": "m",
+        "choices": [{"index": 0, "finish_reason": None, "delta": {"content": content}}],
+    }
 
 
 class Server:
+    """Answers as an OpenAI-compatible server: a JSON error, or the reply streamed as server-sent events, a word
+    every `word_s` seconds (and notes when the client hangs up before the end)."""
+
     def __init__(self) -> None:
         self.requests: list[dict[str, Any]] = []
         self.respond: Responder = lambda body: (200, completion(json.dumps(PLAN)))
+        self.word_s = 0.0
+        self.hung_up = threading.Event()
         outer = self
 
         class Handler(BaseHTTPRequestHandler):
+            protocol_version = "HTTP/1.1"
+
             def do_POST(self) -> None:
                 body = json.loads(self.rfile.read(int(self.headers["Content-Length"])))
                 body["_path"] = self.path
                 body["_auth"] = self.headers.get("Authorization")
                 outer.requests.append(body)
                 status, answer = outer.respond(body)
-                data = json.dumps(answer).encode()
-                self.send_response(status)
-                self.send_header("Content-Type", "application/json")
-                self.send_header("Content-Length", str(len(data)))
+                if status != 200 or not body.get("stream"):
+                    data = json.dumps(answer).encode()
+                    self.send_response(status)
+                    self.send_header("Content-Type", "application/json")
+                    self.send_header("Content-Length", str(len(data)))
+                    self.end_headers()
+                    self.wfile.write(data)
+                    return
+                self.send_response(200)
+                self.send_header("Content-Type", "text/event-stream")
+                self.send_header("Connection", "close")
                 self.end_headers()
-                self.wfile.write(data)
+                content = answer["choices"][0]["message"]["content"]
+                try:
+                    for word in [*content.split(" "), None]:
+                        time.sleep(outer.word_s)
+                        event = "[DONE]" if word is None else json.dumps(chunk(word + " "))
+                        self.wfile.write(f"data: {event}\n\n".encode())
+                        self.wfile.flush()
+                except (BrokenPipeError, ConnectionResetError):
+                    outer.hung_up.set()
 
             def log_message(self, *args: Any) -> None:
                 pass
@@ -101,8 +136,12 @@ def test_a_500_that_names_the_response_format_is_a_refusal_too(server: Server) -
     # llama-cpp-python's server answers an unknown response_format type with a 500 naming the field
     def respond(body: dict[str, Any]) -> tuple[int, dict[str, Any]]:
         if body.get("response_format", {}).get("type") == "json_schema":
-            return 500, {"error": {"message": "1 validation error: ('body', 'response_format', 'type') Input should "
-                                              "be 'text' or 'json_object'"}}  # fmt: skip
+            return 500, {
+                "error": {
+                    "message": "1 validation error: ('body', 'response_format', 'type') Input should "
+                    "be 'text' or 'json_object'"
+                }
+            }
         return 200, completion(json.dumps(PLAN))
 
     server.respond = respond
@@ -149,6 +188,29 @@ def test_a_server_that_hangs_times_out(server: Server) -> None:
     with pytest.raises(PlanningError, match=r"timed out after 0\.3 s"):
         OpenAIChat(server.url, "m", timeout_s=0.3, response_format="json_object").chat(MESSAGES, flat_plan_schema())
     assert time.monotonic() - started < 1.4
+
+
+def test_a_reply_still_coming_at_the_deadline_is_cut_and_the_server_sees_the_client_go(server: Server) -> None:
+    server.respond = lambda body: (200, completion(" ".join(["word"] * 400)))
+    server.word_s = 0.02  # a model that rambles: 8 s of words
+    with pytest.raises(PlanningError, match=r"timed out after 0\.5 s"):
+        OpenAIChat(server.url, "m", timeout_s=0.5, response_format="json_object").chat(MESSAGES, flat_plan_schema())
+    assert server.hung_up.wait(timeout=5.0), "the server went on sending to a client that had given up"
+    assert server.requests[0]["stream"] is True and server.requests[0]["max_tokens"] > 0
+
+
+def test_what_a_server_takes_is_remembered_for_every_client_of_it(server: Server) -> None:
+    def respond(body: dict[str, Any]) -> tuple[int, dict[str, Any]]:
+        if body.get("response_format", {}).get("type") == "json_schema":
+            return 500, {"error": {"message": "Internal Server Error"}}  # as llama-cpp-python's server answers
+        return 200, completion(json.dumps(PLAN))
+
+    server.respond = respond
+    OpenAIChat(server.url, "remembered-model").chat(MESSAGES, flat_plan_schema())
+    assert [r["response_format"]["type"] for r in server.requests] == ["json_schema", "json_object"]
+    later = OpenAIChat(server.url, "remembered-model")  # a new client (the next command, another planner)
+    assert json.loads(later.chat(MESSAGES, flat_plan_schema())) == PLAN
+    assert [r["response_format"]["type"] for r in server.requests] == ["json_schema", "json_object", "json_object"]
 
 
 def test_no_server_at_all_says_it_cannot_be_reached() -> None:
