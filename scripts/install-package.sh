@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Installs this package ($2: "." or ".[test]") into the venv ($1) in editable mode. Binary wheels first; when some
+# dependency has none for this machine (pocketsphinx on Python 3.12, e.g. on a Jetson's aarch64), the Debian
+# packages a source build needs (scripts/build-debs.sh), then pip again, which builds it. With --build ($3) the
+# build packages come first (the test tools always build llama-cpp-python).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+venv=$1
+target=$2
+build=${3:-}
+
+if [[ $build != --build ]]; then
+  errors=$(mktemp)
+  trap 'rm -f "$errors"' EXIT
+  if "$venv/bin/python" -m pip install --quiet --only-binary=:all: -e "$target" 2>"$errors"; then
+    exit 0
+  fi
+  python=$("$venv/bin/python" -c 'import sys; print("%d.%d" % sys.version_info[:2])')
+  echo "Not every dependency has a wheel for Python $python on $(uname -m); building from source:" >&2
+  grep -E '^ERROR' "$errors" >&2 || true
+fi
+# shellcheck disable=SC2046  # one word per package
+bash scripts/ensure-debs.sh $(bash scripts/build-debs.sh "$venv")
+"$venv/bin/python" -m pip install --quiet -e "$target"
