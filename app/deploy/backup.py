@@ -13,7 +13,7 @@ from pathlib import Path
 
 from alembic.runtime.migration import MigrationContext
 from alembic.script import ScriptDirectory
-from sqlalchemy.engine import make_url
+from sqlalchemy.engine import URL, make_url
 
 from app.sessions.db import alembic_config, make_engine, upgrade_to_head
 
@@ -39,13 +39,16 @@ def sqlite_file(url: str) -> Path | None:
 
 def pg_dump_command(url: str, target: str) -> list[str]:
     """pg_dump for a PostgreSQL URL; its password stays out of the command line (PGPASSWORD or ~/.pgpass)."""
-    parsed = make_url(url).set(drivername="postgresql", password=None)
-    return [
-        "pg_dump",
-        "--format=custom",
-        f"--file={target}",
-        f"--dbname={parsed.render_as_string(hide_password=False)}",
-    ]
+    given = make_url(url)
+    plain = URL.create(
+        "postgresql",
+        username=given.username,
+        host=given.host,
+        port=given.port,
+        database=given.database,
+        query=given.query,
+    )
+    return ["pg_dump", "--format=custom", f"--file={target}", f"--dbname={plain.render_as_string()}"]
 
 
 def backup_sqlite(source: Path, target: Path) -> Path:

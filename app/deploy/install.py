@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import pwd
+import shlex
 import shutil
 import stat
 import subprocess
@@ -124,7 +125,7 @@ def describe(action: Action) -> str:
         return f"write {action.path} (mode {action.mode:o}){kept}"
     if isinstance(action, RemoveFile):
         return f"remove {action.path}"
-    return "run " + " ".join(action.argv)
+    return "run " + shlex.join(action.argv)
 
 
 def _under(root: Path, path: Path) -> Path:
@@ -155,16 +156,15 @@ def apply(actions: list[Action], root: Path = Path("/"), runner: Runner = run_co
             else:
                 done.append(f"{target} was not there")
         elif not live and not action.offline:
-            done.append(f"skipped (not the running system): {' '.join(action.argv)}")
+            done.append(f"skipped (not the running system): {shlex.join(action.argv)}")
         elif action.optional and shutil.which(action.argv[0]) is None:
-            done.append(f"skipped ({action.argv[0]} is not installed): {' '.join(action.argv)}")
+            done.append(f"skipped ({action.argv[0]} is not installed): {shlex.join(action.argv)}")
         else:
             result = runner(list(action.argv))
             if result.returncode != 0:
-                raise InstallError(
-                    f"{' '.join(action.argv)} failed ({result.returncode}): {(result.stderr or result.stdout).strip()}"
-                )
-            done.append(f"ran {' '.join(action.argv)}")
+                said = (result.stderr or result.stdout).strip()
+                raise InstallError(f"{shlex.join(action.argv)} failed ({result.returncode}): {said}")
+            done.append(f"ran {shlex.join(action.argv)}")
     return done
 
 

@@ -63,7 +63,8 @@ def _install(args: argparse.Namespace, settings: Settings) -> int:
     if problems:
         print(
             "  fix: put the checkout where every user can read it (e.g. /opt/humanoid) and make its .venv with a "
-            "Python every user can run (the system's, deadsnakes' or uv's under /opt), then install again",
+            "Python every user can run (the system's, deadsnakes', or uv's installed with "
+            "UV_PYTHON_INSTALL_DIR=/opt/uv-python), then install again",
             file=sys.stderr,
         )
         if root == Path("/") and not args.dry_run:

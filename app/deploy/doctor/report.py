@@ -4,9 +4,9 @@ that a check that breaks is itself reported, with what to do, never as a traceba
 from __future__ import annotations
 
 import contextlib
-import getpass
 import grp
 import os
+import pwd
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from enum import StrEnum
@@ -44,6 +44,14 @@ def _process_groups() -> set[str]:
     return names
 
 
+def _user_name() -> str:
+    """Who this process runs as (not $USER, which sudo and su may leave as it was)."""
+    try:
+        return pwd.getpwuid(os.geteuid()).pw_name
+    except KeyError:
+        return str(os.geteuid())
+
+
 @dataclass
 class Machine:
     """What the checks look at. Tests replace parts: as root every permission check passes, so `access` stands
@@ -51,7 +59,7 @@ class Machine:
 
     settings: Settings
     access: Callable[[str, int], bool] = os.access
-    user: Callable[[], str] = getpass.getuser
+    user: Callable[[], str] = _user_name
     groups: Callable[[], set[str]] = _process_groups
     sys_root: Path = Path("/sys")
     timeout_s: float = 3.0
