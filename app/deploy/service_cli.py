@@ -123,6 +123,31 @@ def _status(args: argparse.Namespace, settings: Settings) -> int:
     return 0 if status.ok else 3  # 3: as `systemctl status` says of a unit that is not running
 
 
+def _doctor(args: argparse.Namespace, settings: Settings) -> int:
+    """`humanoid doctor` as the service runs: its user may lack what the operator's login has (or the reverse)."""
+    import shlex
+    import subprocess
+
+    from app.deploy.install import is_root
+    from app.deploy.unit import doctor_command
+
+    spec, _ = _spec(args, settings)
+    command = doctor_command(spec)
+    if args.dry_run:
+        print(shlex.join(command))
+        return 0
+    if not Path("/run/systemd/system").exists():
+        print(
+            "systemd is not running here: run this on the robot's computer (--dry-run shows the command)",
+            file=sys.stderr,
+        )
+        return 1
+    if not is_root():
+        print(f"run it as root: sudo {sys.argv[0]} service doctor", file=sys.stderr)
+        return 1
+    return subprocess.run(command).returncode
+
+
 def add_service_parser(sub: argparse._SubParsersAction) -> None:
     service = sub.add_parser("service", help="run the console as a systemd service (the robot's computer)")
     commands = service.add_subparsers(dest="service_command", required=True)
@@ -131,6 +156,7 @@ def add_service_parser(sub: argparse._SubParsersAction) -> None:
         ("install", _install, "install, enable and start the service (root)"),
         ("uninstall", _uninstall, "stop, disable and remove it; the data stays (root)"),
         ("status", _status, "is it installed, current, enabled, running"),
+        ("doctor", _doctor, "run `humanoid doctor` as the service's user, groups and capability (root)"),
     ):
         command = commands.add_parser(name, help=help_text)
         command.add_argument("--host", default=None, help="interface to serve on (default: HOST, 127.0.0.1)")
@@ -148,9 +174,9 @@ def add_service_parser(sub: argparse._SubParsersAction) -> None:
             help=f"the service's database, recordings and backups (default {DEFAULT_DATA_DIR})",
         )
         command.add_argument("--user", default=SERVICE_NAME, help=f"the service user (default {SERVICE_NAME})")
-        if name != "unit":
+        if name in ("install", "uninstall", "status"):
             command.add_argument("--root", default="/", help="target root directory (an image, tests)")
-        if name in ("install", "uninstall"):
+        if name in ("install", "uninstall", "doctor"):
             command.add_argument("--dry-run", action="store_true", help="print what would be done, do nothing")
         if name == "status":
             command.add_argument("--json", action="store_true")

@@ -144,6 +144,32 @@ def environment(spec: ServiceSpec) -> dict[str, str]:
     return env
 
 
+def process_properties(spec: ServiceSpec) -> list[tuple[str, str]]:
+    """The settings that make the service's process what it is (who, with which groups and capability, where,
+    with which environment): the unit's, and `humanoid service doctor`'s (systemd-run with the same)."""
+    properties = [("User", spec.user), ("Group", spec.user)]
+    if spec.groups:
+        properties.append(("SupplementaryGroups", " ".join(spec.groups)))
+    properties += [
+        ("AmbientCapabilities", "CAP_SYS_NICE"),  # real-time scheduling for the control thread, without root
+        ("CapabilityBoundingSet", "CAP_SYS_NICE"),
+        ("NoNewPrivileges", "yes"),
+        ("ProtectSystem", "full"),
+        ("PrivateTmp", "yes"),
+        ("ProtectKernelModules", "yes"),
+        ("ProtectControlGroups", "yes"),
+        ("UMask", "0027"),
+    ]
+    if spec.managed_data_dir:
+        properties += [("StateDirectory", spec.managed_data_dir), ("StateDirectoryMode", "0750")]
+    else:
+        properties.append(("ReadWritePaths", _escape(str(spec.data_dir))))
+    properties.append(("WorkingDirectory", _escape(str(spec.working_dir))))
+    properties += [("Environment", _escape(f"{k}={v}")) for k, v in environment(spec).items()]
+    properties.append(("EnvironmentFile", f"-{_escape(str(ENV_FILE))}"))
+    return properties
+
+
 def render_unit(spec: ServiceSpec) -> str:
     docs = (spec.working_dir / "docs" / "robot-computer.md").as_uri()
     lines = [
@@ -160,30 +186,7 @@ def render_unit(spec: ServiceSpec) -> str:
         "",
         "[Service]",
         "Type=exec",
-        f"User={spec.user}",
-        f"Group={spec.user}",
-    ]
-    if spec.groups:
-        lines.append(f"SupplementaryGroups={' '.join(spec.groups)}")
-    lines += [
-        "# real-time scheduling for the control thread, without root",
-        "AmbientCapabilities=CAP_SYS_NICE",
-        "CapabilityBoundingSet=CAP_SYS_NICE",
-        "NoNewPrivileges=yes",
-        "ProtectSystem=full",
-        "PrivateTmp=yes",
-        "ProtectKernelModules=yes",
-        "ProtectControlGroups=yes",
-        "UMask=0027",
-    ]
-    if spec.managed_data_dir:
-        lines += [f"StateDirectory={spec.managed_data_dir}", "StateDirectoryMode=0750"]
-    else:
-        lines.append(f"ReadWritePaths={_escape(str(spec.data_dir))}")
-    lines.append(f"WorkingDirectory={_escape(str(spec.working_dir))}")
-    lines += [f"Environment={_escape(f'{k}={v}')}" for k, v in environment(spec).items()]
-    lines += [
-        f"EnvironmentFile=-{_escape(str(ENV_FILE))}",
+        *(f"{key}={value}" for key, value in process_properties(spec)),
         "# migrations after a backup of the SQLite file (the last few are kept)",
         f"ExecStartPre={_command(str(spec.executable), 'db', 'upgrade', '--backup', '--keep', str(KEEP_BACKUPS))}",
         f"ExecStart={_command(*serve_command(spec))}",
@@ -202,6 +205,15 @@ def render_unit(spec: ServiceSpec) -> str:
         "WantedBy=multi-user.target",
     ]
     return "\n".join(lines) + "\n"
+
+
+def doctor_command(spec: ServiceSpec) -> list[str]:
+    """`humanoid doctor` run as the service runs (its user, groups, capability, environment), by systemd-run: what
+    the service itself may open and do, which differs from what the operator's login may."""
+    command = ["systemd-run", "--quiet", "--pipe", "--wait", "--collect"]
+    command += [f"--property={key}={value}" for key, value in process_properties(spec)]
+    command += [str(spec.executable), "doctor", "--backend", spec.backend]
+    return command + (["--device", spec.device] if spec.device else [])
 
 
 def render_udev_rule() -> str:

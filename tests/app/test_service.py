@@ -178,3 +178,47 @@ def test_only_groups_that_exist_are_named(tmp_path: Path) -> None:
     group_file = tmp_path / "group"
     group_file.write_text("root:x:0:\ndialout:x:20:\naudio:x:29:\n")
     assert existing_groups(group_file=group_file) == ("dialout", "audio")
+
+
+NOT_ABOUT_THE_PROCESS = {
+    "Type",
+    "ExecStartPre",
+    "ExecStart",
+    "KillMode",
+    "KillSignal",
+    "TimeoutStopSec",
+    "Restart",
+    "RestartSec",
+    "RestartPreventExitStatus",
+    "StandardOutput",
+    "StandardError",
+    "SyslogIdentifier",
+}
+
+
+def test_the_service_doctor_runs_the_doctor_as_the_unit_runs_the_server(robot_unit: str) -> None:
+    """Same user, groups, capability, sandbox and environment: what the service may open is what is checked."""
+    done = _cli(
+        "service",
+        "doctor",
+        "--dry-run",
+        "--backend",
+        "dynamixel",
+        "--device",
+        "/dev/ttyUSB0",
+        "--host",
+        "0.0.0.0",
+        "--port",
+        "9000",
+    )
+    words = shlex.split(done.stdout)
+    assert words[0] == "systemd-run" and {"--wait", "--pipe"} <= set(words)
+    properties = [w.removeprefix("--property=") for w in words if w.startswith("--property=")]
+    expected = [
+        f"{key}={value}"
+        for key, values in _parse(robot_unit)["Service"].items()
+        for value in values
+        if key not in NOT_ABOUT_THE_PROCESS
+    ]
+    assert properties == expected
+    assert words[-6:] == [str(HUMANOID), "doctor", "--backend", "dynamixel", "--device", "/dev/ttyUSB0"]
