@@ -123,16 +123,20 @@ def _status(args: argparse.Namespace, settings: Settings) -> int:
     return 0 if status.ok else 3  # 3: as `systemctl status` says of a unit that is not running
 
 
-def _doctor(args: argparse.Namespace, settings: Settings) -> int:
-    """`humanoid doctor` as the service runs: its user may lack what the operator's login has (or the reverse)."""
+def _as_service(args: argparse.Namespace, settings: Settings) -> int:
+    """`humanoid ...` as the service runs it (systemd-run): `service doctor`, and `service run ARGS`."""
     import shlex
     import subprocess
 
     from app.deploy.install import is_root
-    from app.deploy.unit import doctor_command
+    from app.deploy.unit import as_service_command, doctor_arguments
 
     spec, _ = _spec(args, settings)
-    command = doctor_command(spec)
+    humanoid_args = doctor_arguments(spec) if args.service_command == "doctor" else args.humanoid_args
+    if not humanoid_args:
+        print("say what to run, e.g.: humanoid service run users add ada --role operator", file=sys.stderr)
+        return 2
+    command = as_service_command(spec, humanoid_args, terminal=sys.stdin.isatty())
     if args.dry_run:
         print(shlex.join(command))
         return 0
@@ -143,7 +147,7 @@ def _doctor(args: argparse.Namespace, settings: Settings) -> int:
         )
         return 1
     if not is_root():
-        print(f"run it as root: sudo {sys.argv[0]} service doctor", file=sys.stderr)
+        print(f"run it as root: sudo {sys.argv[0]} service {args.service_command} ...", file=sys.stderr)
         return 1
     return subprocess.run(command).returncode
 
@@ -156,7 +160,8 @@ def add_service_parser(sub: argparse._SubParsersAction) -> None:
         ("install", _install, "install, enable and start the service (root)"),
         ("uninstall", _uninstall, "stop, disable and remove it; the data stays (root)"),
         ("status", _status, "is it installed, current, enabled, running"),
-        ("doctor", _doctor, "run `humanoid doctor` as the service's user, groups and capability (root)"),
+        ("doctor", _as_service, "run `humanoid doctor` as the service runs (its user, groups, capability; root)"),
+        ("run", _as_service, "run `humanoid ARGS` as the service, on its data: users add, sessions list... (root)"),
     ):
         command = commands.add_parser(name, help=help_text)
         command.add_argument("--host", default=None, help="interface to serve on (default: HOST, 127.0.0.1)")
@@ -176,7 +181,14 @@ def add_service_parser(sub: argparse._SubParsersAction) -> None:
         command.add_argument("--user", default=SERVICE_NAME, help=f"the service user (default {SERVICE_NAME})")
         if name in ("install", "uninstall", "status"):
             command.add_argument("--root", default="/", help="target root directory (an image, tests)")
-        if name in ("install", "uninstall", "doctor"):
+        if name == "run":
+            command.add_argument(
+                "humanoid_args",
+                nargs=argparse.REMAINDER,
+                metavar="ARGS",
+                help="a humanoid command and its arguments, e.g. users add ada --role operator",
+            )
+        if name in ("install", "uninstall", "doctor", "run"):
             command.add_argument("--dry-run", action="store_true", help="print what would be done, do nothing")
         if name == "status":
             command.add_argument("--json", action="store_true")

@@ -207,13 +207,17 @@ def render_unit(spec: ServiceSpec) -> str:
     return "\n".join(lines) + "\n"
 
 
-def doctor_command(spec: ServiceSpec) -> list[str]:
-    """`humanoid doctor` run as the service runs (its user, groups, capability, environment), by systemd-run: what
-    the service itself may open and do, which differs from what the operator's login may."""
-    command = ["systemd-run", "--quiet", "--pipe", "--wait", "--collect"]
+def as_service_command(spec: ServiceSpec, humanoid_args: list[str], terminal: bool = False) -> list[str]:
+    """`humanoid ARGS` run as the service runs (its user, groups, capability, sandbox and environment), by
+    systemd-run: on the service's own database (users, sessions, backups), and for `doctor`, what the service
+    itself may open, which differs from what the operator's login may. `terminal`: a tty for prompts."""
+    command = ["systemd-run", "--quiet", "--wait", "--collect", "--pty" if terminal else "--pipe"]
     command += [f"--property={key}={value}" for key, value in process_properties(spec)]
-    command += [str(spec.executable), "doctor", "--backend", spec.backend]
-    return command + (["--device", spec.device] if spec.device else [])
+    return [*command, str(spec.executable), *humanoid_args]
+
+
+def doctor_arguments(spec: ServiceSpec) -> list[str]:
+    return ["doctor", "--backend", spec.backend, *(["--device", spec.device] if spec.device else [])]
 
 
 def render_udev_rule() -> str:

@@ -222,3 +222,12 @@ def test_the_service_doctor_runs_the_doctor_as_the_unit_runs_the_server(robot_un
     ]
     assert properties == expected
     assert words[-6:] == [str(HUMANOID), "doctor", "--backend", "dynamixel", "--device", "/dev/ttyUSB0"]
+
+
+def test_service_run_gives_the_cli_the_service_s_own_database() -> None:
+    done = _cli("service", "run", "--dry-run", "users", "add", "ada", "--role", "operator")
+    words = shlex.split(done.stdout)
+    assert "--property=Environment=DATABASE_URL=sqlite:////var/lib/humanoid/humanoid.db" in words
+    assert "--property=StateDirectory=humanoid" in words  # made before the first start, owned by the service
+    assert words[-6:] == [str(HUMANOID), "users", "add", "ada", "--role", "operator"]
+    assert _cli("service", "run", "--dry-run").returncode == 2  # nothing to run
