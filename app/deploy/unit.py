@@ -15,8 +15,6 @@ import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from sqlalchemy.engine import make_url
-
 from app.settings import REPO_ROOT, Settings
 
 SERVICE_NAME = "humanoid"
@@ -101,6 +99,8 @@ def spec_from_settings(
 
 
 def is_sqlite(url: str) -> bool:
+    from sqlalchemy.engine import make_url  # here: the `humanoid` command starts without sqlalchemy
+
     return make_url(url).get_backend_name() == "sqlite"
 
 

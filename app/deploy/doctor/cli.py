@@ -4,32 +4,41 @@ from __future__ import annotations
 
 import argparse
 import json
+from typing import TYPE_CHECKING
 
-from app.deploy.doctor import devices, services, system
-from app.deploy.doctor.report import CheckFunction, Machine, exit_code, render_text, run_checks
 from app.settings import Settings
 
-CHECKS: list[tuple[str, CheckFunction]] = [
-    ("python", system.check_python),
-    ("packages", system.check_packages),
-    ("rendering", devices.check_rendering),
-    ("database", services.check_database),
-    ("disk", system.check_disk),
-    ("audio", devices.check_audio),
-    ("serial port", devices.check_serial),
-    ("latency timer", devices.check_latency_timer),
-    ("realtime", system.check_realtime),
-    ("cpu governor", system.check_cpu_governor),
-    ("ports", services.check_ports),
-    ("planner", services.check_planner),
-    ("clock", system.check_clock),
-]
+if TYPE_CHECKING:
+    from app.deploy.doctor.report import CheckFunction
+
+
+def all_checks() -> list[tuple[str, CheckFunction]]:
+    """Imported when the doctor runs (httpx, psutil...), not at every start of the `humanoid` command."""
+    from app.deploy.doctor import devices, services, system
+
+    return [
+        ("python", system.check_python),
+        ("packages", system.check_packages),
+        ("rendering", devices.check_rendering),
+        ("database", services.check_database),
+        ("disk", system.check_disk),
+        ("audio", devices.check_audio),
+        ("serial port", devices.check_serial),
+        ("latency timer", devices.check_latency_timer),
+        ("realtime", system.check_realtime),
+        ("cpu governor", system.check_cpu_governor),
+        ("ports", services.check_ports),
+        ("planner", services.check_planner),
+        ("clock", system.check_clock),
+    ]
 
 
 def _doctor(args: argparse.Namespace, settings: Settings) -> int:
+    from app.deploy.doctor.report import Machine, exit_code, render_text, run_checks
+
     overrides = {"backend": args.backend, "dynamixel_port": args.device}
     settings = settings.model_copy(update={k: v for k, v in overrides.items() if v is not None})
-    checks = run_checks(CHECKS, Machine(settings))
+    checks = run_checks(all_checks(), Machine(settings))
     if args.json:
         print(json.dumps({"checks": [c.to_json() for c in checks]}, indent=2))
     else:
