@@ -96,11 +96,16 @@ def plan_install(spec: ServiceSpec, env_file: str, root: Path = Path("/")) -> li
         Command(("udevadm", "control", "--reload"), optional=True),
         Command(("udevadm", "trigger", "--action=add", "--subsystem-match=usb-serial"), optional=True),
         Command(("systemctl", "daemon-reload")),
-        Command(("systemctl", f"--root={root}", "enable", spec.unit_name), offline=True)
-        if root != Path("/")
-        else Command(("systemctl", "enable", "--now", spec.unit_name)),
     ]
-    return actions
+    if root != Path("/"):
+        return [*actions, Command(("systemctl", f"--root={root}", "enable", spec.unit_name), offline=True)]
+    # restart, not start: installed again over a running service, the new unit applies now (its stop is the
+    # controlled one)
+    return [
+        *actions,
+        Command(("systemctl", "enable", spec.unit_name)),
+        Command(("systemctl", "restart", spec.unit_name)),
+    ]
 
 
 def plan_uninstall(spec: ServiceSpec, root: Path = Path("/")) -> list[Action]:

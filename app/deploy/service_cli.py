@@ -1,5 +1,5 @@
-"""`humanoid service unit | install | uninstall | status`: the console as a systemd service on the robot's
-computer (starts at boot, restarts on failure, real-time priority without root, logs in the journal)."""
+"""`humanoid service unit | install | uninstall | status | doctor | run`: the console as a systemd service on the
+robot's computer (starts at boot, restarts on failure, real-time priority without root, logs in the journal)."""
 
 from __future__ import annotations
 

@@ -135,7 +135,7 @@ def test_a_dry_run_says_what_it_would_do_and_changes_nothing() -> None:
     assert done.returncode == 0, done.stderr
     assert "run useradd --system" in done.stdout and "humanoid-test-nobody" in done.stdout
     assert "write /etc/systemd/system/humanoid.service" in done.stdout
-    assert "run systemctl enable --now humanoid.service" in done.stdout
+    assert "run systemctl enable humanoid.service\n  run systemctl restart humanoid.service" in done.stdout
     assert sorted(Path("/etc/systemd/system").glob("humanoid*")) == before
     with pytest.raises(KeyError):
         pwd.getpwnam("humanoid-test-nobody")
