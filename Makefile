@@ -1,8 +1,10 @@
 # Two commands on a fresh machine: `make run` (the app, simulated robot) and `make test` (the whole suite and the
 # documentation site). `make docs` writes the generated reference pages again and builds the site into site/.
-# Each sets up what it needs: Debian packages (apt-get, when missing and root), .venv, the package.
+# Each sets up what it needs: a supported Python (3.11-3.13: scripts/find-python.sh), .venv, Debian packages
+# (apt-get, when missing and root), the package (and what building a dependency without a wheel needs).
 
-PYTHON ?= python3
+PYTHON ?=
+export PYTHON
 VENV := .venv
 BIN := $(VENV)/bin
 HOST ?= 127.0.0.1
@@ -12,9 +14,9 @@ export HOST PORT
 export NO_MKDOCS_2_WARNING := 1
 
 RUN_DEBS := libgl1 libegl1 libportaudio2 espeak-ng
-TEST_DEBS := $(RUN_DEBS) chromium postgresql
+TEST_DEBS := $(RUN_DEBS) chromium postgresql systemd
 
-.PHONY: run test lint docs bench setup setup-test deps-run deps-test clean
+.PHONY: run test lint docs bench setup setup-test venv deps-run deps-test clean
 
 run: setup
 	$(BIN)/humanoid db upgrade
@@ -25,6 +27,7 @@ test: setup-test
 	$(BIN)/ruff format --check app robot tests
 	$(BIN)/python scripts/docs_reference.py --check
 	$(BIN)/mkdocs build --strict -q -d site
+	$(BIN)/python scripts/check-aarch64
 	$(BIN)/python -m pytest -q
 
 lint: setup-test
@@ -38,24 +41,23 @@ docs: setup-test
 bench: setup-test
 	$(BIN)/humanoid bench core --output bench-results/core.json --json
 
-setup: deps-run $(VENV)/.installed-run
-setup-test: deps-test $(VENV)/.installed-test
+setup: venv deps-run $(VENV)/.installed-run
+setup-test: venv deps-test $(VENV)/.installed-test
 
+venv:
+	@bash scripts/make-venv.sh $(VENV)
 deps-run:
 	@bash scripts/ensure-debs.sh $(RUN_DEBS)
 deps-test:
 	@bash scripts/ensure-debs.sh $(TEST_DEBS)
 
-$(VENV)/bin/python:
-	$(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade pip
-
-$(VENV)/.installed-run: $(VENV)/bin/python pyproject.toml
-	$(BIN)/python -m pip install --quiet -e .
+# a venv made again (an unsupported Python) has no stamps: the package is installed again
+$(VENV)/.installed-run: pyproject.toml
+	@bash scripts/install-package.sh $(VENV) .
 	touch $@
 
-$(VENV)/.installed-test: $(VENV)/bin/python pyproject.toml
-	$(BIN)/python -m pip install --quiet -e ".[test]"
+$(VENV)/.installed-test: pyproject.toml
+	@bash scripts/install-package.sh $(VENV) ".[test]" --build
 	touch $(VENV)/.installed-run $@
 
 clean:

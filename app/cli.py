@@ -1,4 +1,5 @@
-"""The `humanoid` command: serve, run, transcribe, plan, estop, describe, sessions, hardware, db upgrade, bench."""
+"""The `humanoid` command: serve, run, transcribe, plan, estop, describe, sessions, hardware, users, db, service,
+doctor, bench."""
 
 from __future__ import annotations
 
@@ -8,6 +9,9 @@ import ssl
 import sys
 
 from app.auth.cli import add_users_parser
+from app.deploy.db_cli import add_db_parser
+from app.deploy.doctor.cli import add_doctor_parser
+from app.deploy.service_cli import add_service_parser
 from app.hardware_cli import add_hardware_parser
 from app.sessions.cli import add_sessions_parser
 from app.settings import Settings, get_settings
@@ -242,14 +246,6 @@ def _estop(args: argparse.Namespace, settings: Settings) -> int:
     return 0 if response.is_success else 1
 
 
-def _db(args: argparse.Namespace, settings: Settings) -> int:
-    from app.sessions.db import upgrade_to_head
-
-    upgrade_to_head(settings.database_url)
-    print(f"database at head: {settings.database_url}")
-    return 0
-
-
 def _describe(args: argparse.Namespace, settings: Settings) -> int:
     """The robot's description: its URDF (--urdf), or a summary of its joints."""
     from pathlib import Path
@@ -358,9 +354,9 @@ def build_parser() -> argparse.ArgumentParser:
     add_hardware_parser(sub)
     add_users_parser(sub)
 
-    db = sub.add_parser("db", help="database maintenance")
-    db_sub = db.add_subparsers(dest="db_command", required=True)
-    db_sub.add_parser("upgrade", help="apply pending migrations").set_defaults(func=_db)
+    add_db_parser(sub)
+    add_service_parser(sub)
+    add_doctor_parser(sub)
 
     bench = sub.add_parser("bench", help="benchmarks, written as JSON")
     suites = [

@@ -103,6 +103,16 @@ class ServerProcess:
         assert self._process is not None, "not started"
         return self._process.pid
 
+    def send_signal(self, signum: int) -> None:
+        """To the server alone, not its children (as `systemctl stop` does with KillMode=mixed)."""
+        assert self._process is not None, "not started"
+        self._process.send_signal(signum)
+
+    def wait(self, timeout: float) -> int:
+        """The server's exit code, once it has ended (subprocess.TimeoutExpired if not within `timeout`)."""
+        assert self._process is not None, "not started"
+        return self._process.wait(timeout=timeout)
+
     def kill(self) -> None:
         """SIGKILL, as a crash: nothing gets to close or flush."""
         if self._process and self._process.poll() is None:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import signal
 import threading
 import time
 from collections.abc import Iterator
@@ -16,7 +17,10 @@ import pytest
 
 from app.bench.browser import launch_chromium
 from app.bench.server import ServerProcess
+from app.deploy.unit import STOP_TIMEOUT_S
 from app.mirror_process import MIRROR_NICE
+from app.sessions.db import make_engine, make_session_factory
+from app.sessions.models import SessionRow
 from robot.hardware import control_table as ct
 from robot.hardware.bus_emulator import BusEmulator
 from robot.hardware.config import default_config, save_config
@@ -141,6 +145,24 @@ def test_when_the_web_server_dies_the_robot_process_makes_the_controlled_stop(to
     wait_until(lambda: emulator.read(14, ct.GOAL_POSITION) > ct.POSITION_CENTRE + 100)  # l_knee crouching
     wait_until(lambda: not any(emulator.read(j.servo_id, ct.TORQUE_ENABLE) for j in config.joints), 8)
     worker.wait(timeout=10)  # and then it exits (psutil.TimeoutExpired if not)
+
+
+def test_systemctl_stop_makes_the_controlled_stop_then_the_server_exits(torque_on) -> None:
+    """`systemctl stop humanoid`: the unit's KillMode=mixed sends SIGTERM to the web server alone. Its shutdown
+    stops the robot the controlled way (crouch, then torque off), then everything exits cleanly, before the unit's
+    stop timeout (after which systemd would kill what is left)."""
+    emulator, server, worker = torque_on
+    config = default_config()
+    server.send_signal(signal.SIGTERM)
+    wait_until(lambda: emulator.read(14, ct.GOAL_POSITION) > ct.POSITION_CENTRE + 100)  # l_knee crouching
+    wait_until(lambda: not any(emulator.read(j.servo_id, ct.TORQUE_ENABLE) for j in config.joints), 8)
+    # uvicorn re-raises the SIGTERM once its graceful shutdown is done; systemd counts that as a clean exit
+    assert server.wait(timeout=STOP_TIMEOUT_S) in (0, -signal.SIGTERM)
+    worker.wait(timeout=5)  # the robot process has ended too (psutil.TimeoutExpired if not)
+    factory = make_session_factory(make_engine(f"sqlite:///{server.workdir / 'server.db'}"))
+    with factory() as db:
+        (session,) = db.query(SessionRow).all()
+    assert session.outcome == "ended" and session.ended_at is not None  # closed by the app, not found open
 
 
 def test_when_the_robot_process_dies_the_servos_hold_then_a_new_one_takes_them_over_and_stops(torque_on) -> None:

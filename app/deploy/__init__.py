@@ -1,0 +1,1 @@
+"""Running on the robot's own computer: the systemd service, `humanoid doctor`, database backups on upgrade."""
