@@ -12,11 +12,14 @@ from pathlib import Path
 
 import pytest
 from alembic import command
+from alembic.script import ScriptDirectory
 
 from app.deploy.backup import backup_sqlite
 from app.sessions.db import alembic_config, upgrade_to_head
 
 HUMANOID = Path(sys.executable).parent / "humanoid"
+
+HEAD = ScriptDirectory.from_config(alembic_config("sqlite://")).get_current_head()  # the code's schema
 
 
 def _cli(url: str, *args: str) -> subprocess.CompletedProcess:
@@ -48,7 +51,7 @@ def test_db_backup_copies_the_database(tmp_path: Path) -> None:
     target = tmp_path / "copy.db"
     done = _cli(url, "db", "backup", str(target))
     assert done.returncode == 0, done.stderr
-    assert _read(target) == ("0004", [0, 1, 2])
+    assert _read(target) == (HEAD, [0, 1, 2])
     assert _cli(url, "db", "backup", str(target)).returncode == 1  # never overwritten unasked
     assert _cli(url, "db", "backup", str(target), "--force").returncode == 0
 
@@ -90,10 +93,10 @@ def test_upgrade_backs_up_before_migrating_and_keeps_the_last_ones(tmp_path: Pat
     url = _database(database, revision="0003")  # a robot still on the previous release
     done = _cli(url, "db", "upgrade", "--backup", "--keep", "2")
     assert done.returncode == 0, done.stderr
-    assert _read(database) == ("0004", [0, 1, 2])  # migrated, sessions kept
+    assert _read(database) == (HEAD, [0, 1, 2])  # migrated, sessions kept
     (backup,) = (tmp_path / "backups").glob("humanoid-*.db")
     assert _read(backup) == ("0003", [0, 1, 2])  # the database as it was before
-    assert "0003 -> 0004" in done.stdout
+    assert f"0003 -> {HEAD}" in done.stdout
 
     again = _cli(url, "db", "upgrade", "--backup", "--keep", "2")
     assert "already" in again.stdout and len(list((tmp_path / "backups").glob("*.db"))) == 1  # nothing to do
@@ -121,7 +124,7 @@ def test_a_fresh_database_is_made_without_a_backup(tmp_path: Path) -> None:
     done = _cli(url, "db", "upgrade", "--backup")
     assert done.returncode == 0, done.stderr
     assert not (tmp_path / "new" / "backups").exists()
-    assert _read(tmp_path / "new" / "humanoid.db") == ("0004", [])
+    assert _read(tmp_path / "new" / "humanoid.db") == (HEAD, [])
 
 
 def test_postgresql_gets_the_pg_dump_command_that_backs_it_up(tmp_path: Path) -> None:
