@@ -16,7 +16,8 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import replace
-from typing import Any
+
+import numpy as np
 
 from robot.config import RobotConfig
 from robot.control.gait import write_placo_model
@@ -29,7 +30,7 @@ from robot.core.body import Body, BodyLinks, CommandHandler
 from robot.core.inbox import MotionInbox
 from robot.core.loop import ControlLoop
 from robot.core.motion import MotionCommands
-from robot.core.publisher import MissionParts, StatePublisher, legs_state
+from robot.core.publisher import MissionParts, StatePublisher
 from robot.core.safety import SafetyLatch
 from robot.core.tick import ControlTick
 from robot.diagnostics.robot_sources import RobotDiagnostics
@@ -114,7 +115,7 @@ class Robot:
         legs = locomotion is not None and body.senses.can_walk
         self.inbox = MotionInbox(self._lock, time.monotonic if config.realtime else body.now) if legs else None
         self.runner: TaskRunner | None = None
-        self.arbiter = self._arbiter(stand, legs)
+        self.arbiter = self._build_arbiter(stand, legs)
         self.motion = MotionCommands(
             self._lock,
             self.latch,
@@ -203,7 +204,7 @@ class Robot:
     # ----------------------------------------------------------------------------------------------------------
     # wiring
 
-    def _arbiter(self, stand: Any, legs: bool) -> JointArbiter:
+    def _build_arbiter(self, stand: np.ndarray, legs: bool) -> JointArbiter:
         names = self.body.joint_names
         pan, tilt = names.index("head_pan"), names.index("head_tilt")
         dt = self.dt
@@ -280,14 +281,14 @@ class Robot:
 
     def _mission_parts(self) -> MissionParts:
         assert self.runner is not None and self.skills is not None and self.inbox is not None
-        locomotion, localiser, navigate = self.locomotion, self.localiser, self.skills.navigate
-        assert locomotion is not None
+        assert self.locomotion is not None
         return MissionParts(
             plans=self.runner,
-            teleop_active=lambda: self.inbox is not None and self.inbox.teleop_active,
-            navigation=lambda: navigate.navigation,
-            held_object=lambda: self.arm.held,
-            locomotion=lambda posture: legs_state(locomotion, *localiser.estimated_trunk(), posture),
+            teleop=self.inbox,
+            navigation=self.skills.navigate,
+            hand=self.arm,
+            locomotion=self.locomotion,
+            trunk=self.localiser.estimated_trunk,
             perception=self._perception_state,
         )
 

@@ -40,15 +40,33 @@ class PlanView(Protocol):
         """The plan to show: the running one, else one held (awaiting approval, paused), else the last one."""
 
 
+class TeleopView(Protocol):
+    @property
+    def teleop_active(self) -> bool: ...
+
+
+class NavigationView(Protocol):
+    @property
+    def navigation(self) -> NavigationState | None:
+        """The walk under way, if any."""
+
+
+class HandView(Protocol):
+    @property
+    def held(self) -> str | None: ...
+
+
 @dataclass(frozen=True)
 class MissionParts:
-    """The parts of the state a robot with legs, plans and perception adds."""
+    """The parts of the state a robot with legs, plans and perception adds (read every tick: objects and bound
+    methods, no lambdas in between)."""
 
     plans: PlanView
-    teleop_active: Callable[[], bool]
-    navigation: Callable[[], NavigationState | None]
-    held_object: Callable[[], str | None]
-    locomotion: Callable[[str], LocomotionState]  # given the posture's label
+    teleop: TeleopView
+    navigation: NavigationView
+    hand: HandView
+    locomotion: LocomotionController
+    trunk: Callable[[], tuple[np.ndarray, np.ndarray]]  # the trunk's estimated position and rotation
     perception: Callable[[], PerceptionState | None]
 
 
@@ -91,7 +109,7 @@ class StatePublisher:
                 mode = Mode.ESTOP
             elif running:
                 mode = Mode.EXECUTING
-            elif mission is not None and mission.teleop_active():
+            elif mission is not None and mission.teleop.teleop_active:
                 mode = Mode.TELEOP
             else:
                 mode = Mode.IDLE
@@ -110,14 +128,14 @@ class StatePublisher:
                 fallen=body.fallen,
                 qpos=body.qpos,
                 mocap_positions=body.mocap_positions,
-                navigation=mission.navigation() if mission is not None else None,
+                navigation=mission.navigation.navigation if mission is not None else None,
                 approval_required=approval,
                 power=body.power,
                 objects=body.objects,
-                held_object=mission.held_object() if mission is not None else None,
+                held_object=mission.hand.held if mission is not None else None,
                 plan=plan,
                 control=self._control(),
-                locomotion=mission.locomotion(posture) if mission is not None else None,
+                locomotion=legs_state(mission.locomotion, *mission.trunk(), posture) if mission is not None else None,
                 perception=mission.perception() if mission is not None else None,
                 proprioception=body.proprioception,
                 torque_enabled=body.torque_enabled,
