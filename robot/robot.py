@@ -115,6 +115,8 @@ class Robot:
         legs = locomotion is not None and body.senses.can_walk
         self.inbox = MotionInbox(self._lock, time.monotonic if config.realtime else body.now) if legs else None
         self.runner: TaskRunner | None = None
+        # The lambdas below name units built further down (the publisher and the skills need the body bound first,
+        # for its perception): they are read once everything is built, never during construction.
         self.arbiter = self._build_arbiter(stand, legs)
         self.motion = MotionCommands(
             self._lock,
@@ -124,7 +126,7 @@ class Robot:
             body.crouch_posture(),
             body.motion_refusal,
             inbox=self.inbox,
-            locomotion=locomotion,
+            locomotion=locomotion if legs else None,
             plan_running=lambda: self.runner is not None and self.runner.running,
             plans_busy=lambda: self.runner is not None and self.runner.busy,
             reset_pending=lambda: self.ticker.reset_pending,
