@@ -579,7 +579,8 @@ class EventSubscription(Protocol):
 class RobotPort(Protocol):
     """What `app/` may call on the robot side. Nothing else crosses the boundary.
 
-    Implemented in-process by `robot.worker.RobotWorker` and across a process boundary by
+    Implemented in-process by `robot.robot.Robot` on a body (built as `robot.worker.RobotWorker` for the
+    simulation, `robot.hardware.worker.HardwareWorker` for the real robot) and across a process boundary by
     `robot.process.WorkerProcess`.
     """
 

@@ -75,7 +75,7 @@ def run_diagnostics(duration_s: float = 60.0, seed: int = 0) -> dict[str, Any]:
                              disk_path=tmp)  # fmt: skip
         runtime = Runtime.start(settings, worker=worker)
         try:
-            monitor = worker._diagnostics.monitor  # the bench measures the thread itself
+            monitor = worker.health.monitor  # the bench measures the thread itself
             while worker.diagnostics() is None:
                 time.sleep(0.1)
             native = monitor.native_thread_id

@@ -5,12 +5,10 @@ Only the control thread calls these methods; nothing else touches `MjData`.
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
-
 import mujoco
 import numpy as np
 
+from robot.core.measurements import Measurements
 from robot.model import humanoid_v1
 from robot.model.scene import (
     SPARE_OBSTACLE_HALF,
@@ -22,45 +20,8 @@ from robot.model.scene import (
 )
 from robot.model.world import WorldLayout
 
-# A biped is considered fallen beyond this trunk tilt or below this trunk height.
-FALL_TILT_DEG = 45.0
-FALL_HEIGHT_M = 0.12  # a deep crouch (reaching to a 0.2 m table) brings the trunk to 0.15 m
 # Gap left under the soles when the robot is placed, so it settles onto the floor instead of starting in it (m).
 SOLE_CLEARANCE_M = 0.001
-
-
-@dataclass(frozen=True)
-class Measurements:
-    """What the controller reads each tick."""
-
-    sim_time_s: float
-    joint_positions: np.ndarray  # (n_joints,) in humanoid_v1.JOINT_NAMES order
-    joint_velocities: np.ndarray
-    base_position: np.ndarray  # (3,)
-    base_quat: np.ndarray  # (4,) wxyz
-    imu_quat: np.ndarray  # (4,) wxyz, trunk orientation from the IMU
-    imu_gyro: np.ndarray  # (3,) rad/s in the trunk frame
-    imu_accel: np.ndarray  # (3,) m/s^2 in the trunk frame (specific force: +9.8 up when still)
-    foot_forces: np.ndarray  # (2, 4) N on each sole's four force pads, left then right
-    joint_torques: np.ndarray | None = None  # (n_joints,) Nm the servos exert (what their current says)
-    com: np.ndarray | None = None  # (3,) the robot's centre of mass in the world frame
-    imu_stamp_s: float | None = None  # when the IMU sample was taken (None: this tick)
-
-    @property
-    def tilt_deg(self) -> float:
-        _, x, y, _ = self.base_quat
-        # z component of the trunk's up axis in the world frame
-        up_z = 1.0 - 2.0 * (x * x + y * y)
-        return math.degrees(math.acos(max(-1.0, min(1.0, up_z))))
-
-    @property
-    def yaw_rad(self) -> float:
-        w, x, y, z = self.base_quat
-        return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-
-    @property
-    def fallen(self) -> bool:
-        return bool(self.tilt_deg > FALL_TILT_DEG or self.base_position[2] < FALL_HEIGHT_M)
 
 
 class SimulationDiverged(RuntimeError):

@@ -10,7 +10,6 @@ import pytest
 from robot.interface import ExecutePlan, PlanState, Posture, Refusal, SetPosture, StepState
 from robot.model import humanoid_v1
 from robot.planning.executor import ExecutionContext
-from robot.task_bodies import ArmBody
 
 ARM_JOINTS = ("r_sho_pitch", "r_sho_roll", "r_el")
 
@@ -24,8 +23,10 @@ def test_speech_overlaps_the_arm_finishing_and_a_body_step_waits_for_it(make_wor
     worker = make_worker(realtime=False)
     assert worker.wait_for(lambda s: s.sim_time_s >= 0.5, 30.0)
     cancel = threading.Event()
-    ctx = ExecutionContext(cancel=cancel, say=lambda text: None, wait_sim=lambda s: worker._wait_sim(s, cancel))
-    ArmBody(worker, ctx).stow_arm(finish_in_background=True)  # as placing leaves it: swung back, still unfolding
+    ctx = ExecutionContext(cancel=cancel, say=lambda text: None, wait_sim=lambda s: worker.runner.wait_sim(s, cancel))
+    worker.skills.manipulate.arm_body(ctx).stow_arm(
+        finish_in_background=True
+    )  # as placing leaves it: swung back, still unfolding
     left_at = worker.state().sim_time_s
     assert max(abs(a - humanoid_v1.stand_posture()[n]) for n, a in _arm_angles(worker).items()) > 0.5
 

@@ -47,7 +47,7 @@ def test_an_object_behind_the_robot_is_found_by_turning_around() -> None:
     worker = _headless(layout)
     try:
         # forget where the world says it is: the search must look around, not just glance at the counter
-        worker._expected_position = lambda name: None  # type: ignore[method-assign]
+        worker.skills.detect.expected_position = lambda name: None  # type: ignore[method-assign]
         state = _detect(worker, "green apple")
         assert state.plan.state == PlanState.SUCCEEDED, state.plan.steps[0].detail
         found = next(e for e in reversed(worker.recent_events()) if e.kind == "perception/object_found")

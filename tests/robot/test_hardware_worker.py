@@ -95,7 +95,7 @@ def test_torque_stays_off_until_enabled_then_postures_move_the_servos(robot, emu
     wait(lambda: abs(emulator.position_rad(sid("r_knee")) - knee) < 0.02, timeout=8)
     # the mirror draws the measured pose
     state = robot.state()
-    assert len(state.qpos) == robot._scene.model.nq and state.torque_enabled
+    assert len(state.qpos) == robot.body.scene.model.nq and state.torque_enabled
     assert robot.submit(Teleop(0.1, 0, 0)).refusal == Refusal.UNSUPPORTED
 
 
@@ -231,8 +231,7 @@ def test_a_robot_process_started_on_servos_left_holding_takes_them_over_then_mak
     first.start()
     first.submit(SetTorque(True))
     wait(lambda: first.state().torque_enabled)
-    first._stop.set()  # the process dies: no controlled stop, no torque off, the port just goes quiet
-    first._thread.join(timeout=2)
+    first.loop.stop(timeout_s=2)  # the process dies: no controlled stop, no torque off, the port just goes quiet
     first.bus.close()
     wait(lambda: all(emulator.read(j.servo_id, ct.BUS_WATCHDOG) == -1 for j in CONFIG.joints))  # tripped
     assert all(torque_on(emulator))

@@ -8,7 +8,7 @@ import math
 from robot.interface import ExecutePlan, KnownObject, PlanState, RunCommand
 from robot.model.world import generate_world
 from robot.sim.backend import MujocoSimBackend
-from robot.simple_actions import describe
+from robot.skills.simple import describe
 from robot.worker import RobotWorker
 
 

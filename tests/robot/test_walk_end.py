@@ -11,10 +11,10 @@ import time
 import numpy as np
 import pytest
 
+from robot.core.arbiter import WALK_TO_STAND_SPEED_RAD_S
 from robot.interface import StopTeleop, Teleop
 from robot.manipulation.grasp_plan import CARRY_ARM
 from robot.model import humanoid_v1
-from robot.worker import WALK_TO_STAND_SPEED_RAD_S
 
 LEGS = [humanoid_v1.JOINT_NAMES.index(n) for n in humanoid_v1.JOINT_NAMES if n[2:5] in ("hip", "kne", "ank")]
 # (the ankles also carry the IMU balance feedback, which comes back on, a few mrad, once the legs have arrived)
@@ -23,13 +23,10 @@ HIPS_AND_KNEES = [humanoid_v1.JOINT_NAMES.index(n) for n in humanoid_v1.JOINT_NA
 
 def _carry(worker) -> None:
     """The arms in the carrying pose, as `pick_object` leaves them (set directly: no mug needed for the legs)."""
-    targets = worker._default_stand.copy()
+    targets = worker.arbiter.default_stand.copy()
     for name, value in CARRY_ARM.items():
         targets[humanoid_v1.JOINT_NAMES.index(name)] = value
-    worker._loco.walking.ik.set_upper_body(dict(zip(humanoid_v1.JOINT_NAMES, targets, strict=True)))
-    with worker._lock:
-        worker._stand = targets
-        worker._posture.move_to(targets)
+    worker.arbiter.stand_with_upper_body(targets)
 
 
 @pytest.mark.slow
@@ -39,7 +36,7 @@ def test_a_carrying_robot_comes_to_rest_from_a_walk_without_a_jolt(make_worker) 
     write = worker.backend.write
 
     def record(targets: np.ndarray) -> None:
-        written.append((worker._loco.moving, np.array(targets)))
+        written.append((worker.locomotion.moving, np.array(targets)))
         write(targets)
 
     worker.backend.write = record
@@ -61,6 +58,8 @@ def test_a_carrying_robot_comes_to_rest_from_a_walk_without_a_jolt(make_worker) 
     assert max(jumps) <= WALK_TO_STAND_SPEED_RAD_S * worker.dt + 0.005, f"a leg target jumped {max(jumps):.3f} rad"
     moved = float(np.max(np.abs(standing[-1][LEGS] - standing[0][LEGS])))
     assert moved > 0.1  # carrying, the walk did end in a deeper posture: the test saw the transition
-    assert np.allclose(standing[-1][LEGS], worker._stand[LEGS], atol=0.03)  # and the legs reached the standing one
+    assert np.allclose(
+        standing[-1][LEGS], worker.arbiter.stand[LEGS], atol=0.03
+    )  # and the legs reached the standing one
     tilt = math.degrees(math.acos(float(worker.backend.data.body("body_link").xmat[8])))
     assert tilt < 5.0

@@ -19,7 +19,7 @@ from robot.planning.executor import ExecutionContext, StepFailed
 
 @dataclass
 class SimpleActions:
-    """The capabilities, over what they need from the worker (given as callables, so tests can stand them in)."""
+    """The capabilities, over what they need from the robot (given as callables, so tests can stand them in)."""
 
     navigate: Callable[[dict[str, str], ExecutionContext], str]
     search_body: Callable[[ExecutionContext], SearchBody]

@@ -1,0 +1,177 @@
+"""The robot as picking and placing use it (the pick and place procedures' `PickBody` and `PlaceBody`): find the
+object with a fresh look, walk to a stance, play arm moves, stand up holding it or stow the arm. Each call blocks
+in simulated time and gives up when the plan is cancelled."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+from robot.control.head import DEFAULT_TILT
+from robot.manipulation.arm_motion import JointMove, Move
+from robot.manipulation.grasp_plan import Stance, carry_moves, comfortably_in_reach, grasp_stance
+from robot.manipulation.pick import PickFailed
+from robot.model import humanoid_v1
+from robot.model.world import WorldLayout
+from robot.navigation.navigator import NavigationFailed, Navigator
+from robot.planning.executor import ExecutionContext
+from robot.skills.body import BodyParts
+from robot.skills.detect import Looking
+
+LOCATE_TIMEOUT_S = 2.0
+STAGING_BACK_M = 0.12
+STANCE_SETTLE_M = 0.02
+STEP_TO_M = 0.6  # nearer than this, the stance is corrected by a straight walk
+STAND_UP_S = 1.5
+SWING_BACK = {"r_sho_pitch": 1.57, "r_sho_roll": 0.0, "r_el": 1.8, "r_wrist": -0.9}
+
+
+class ArmBody:
+    """The arm, the legs and the eyes for one manipulation step. `navigator`: walks for this step; `blocked`:
+    whether a map point is taken (None before the first map); `walk_ended`: a walk of this step is over."""
+
+    def __init__(
+        self,
+        parts: BodyParts,
+        layout: WorldLayout,
+        ctx: ExecutionContext,
+        looking: Looking,
+        navigator: Callable[[ExecutionContext], Navigator],
+        blocked: Callable[[], Callable[[float, float], bool] | None],
+        walk_ended: Callable[[], None],
+    ) -> None:
+        self._parts = parts
+        self._layout = layout
+        self._ctx = ctx
+        self._looking = looking
+        self._navigator = navigator
+        self._blocked = blocked
+        self._walk_ended = walk_ended
+
+    def locate(self, name: str, near: np.ndarray | None = None) -> np.ndarray | None:
+        perception = self._parts.perception
+        assert perception is not None
+        if near is None:
+            remembered = perception.memory.get(name)
+            if remembered is None:
+                return None
+            near = np.asarray(remembered.position)
+        self._looking.look_at(near)
+        clock = self._parts.clock
+        deadline = clock.now() + LOCATE_TIMEOUT_S
+        while clock.now() < deadline:
+            for detection in self._looking.fresh_detections():
+                if detection.label == name:
+                    return np.array(detection.position, dtype=float)
+            self._ctx.wait_sim(0.05)
+        return None
+
+    def to_feet(self, point_in_map: np.ndarray) -> np.ndarray:
+        position, rotation = self._parts.localiser.map_trunk()
+        in_trunk = rotation.T @ (np.asarray(point_in_map, dtype=float) - position)
+        trunk = self._parts.arm.motion().trunk_in_feet(self._parts.arm.joint_positions())
+        return trunk[:3, :3] @ in_trunk + trunk[:3, 3]
+
+    def comfortably_reaches(self, point_in_map: np.ndarray) -> bool:
+        """Whether the right hand reaches the map point from where the robot stands, with a margin to spare."""
+        return comfortably_in_reach(self.to_feet(point_in_map))
+
+    def go_to(self, stance: Stance, reach: np.ndarray | None = None) -> None:
+        good_stop = None if reach is None else (lambda: self.comfortably_reaches(reach))
+        self._parts.head.point(0.0, DEFAULT_TILT)
+        back = (stance.x - STAGING_BACK_M * math.cos(stance.yaw), stance.y - STAGING_BACK_M * math.sin(stance.yaw))
+        navigator = self._navigator(self._ctx)
+        position, _ = self._parts.localiser.map_trunk()
+        here = (float(position[0]), float(position[1]))
+        try:
+            if math.dist(here, (stance.x, stance.y)) < STEP_TO_M:  # the reach window is +-4 cm: settle tightly
+                navigator.step_to((stance.x, stance.y, stance.yaw), STANCE_SETTLE_M, good_stop)
+            else:
+                navigator.go(back, (stance.x, stance.y, stance.yaw), good_stop)
+        except NavigationFailed as exc:
+            raise PickFailed(str(exc)) from exc
+        finally:
+            self._walk_ended()
+
+    def stance_for(self, point_in_map: np.ndarray) -> Stance:
+        x, y = float(point_in_map[0]), float(point_in_map[1])
+        facing = next(
+            (p.approach[2] for p in self._layout.places if p.surface is not None and p.surface.contains(x, y)),
+            None,
+        )
+        if facing is None:
+            position, _ = self._parts.localiser.map_trunk()
+            facing = math.atan2(y - position[1], x - position[0])
+        return grasp_stance((x, y), facing, self._blocked())
+
+    def arm(self, moves: list[Move]) -> None:
+        arm_part = self._parts.arm
+        if not arm_part.active:
+            # a walk that has just ended may still be moving to the standing posture: reaching from the posture half
+            # way (knees deep as when carrying) made the first hand move snap the legs straight and tip the robot
+            self._wait_standing()
+        arm = arm_part.take()
+        arm.queue(*moves)
+        try:
+            while not arm.done.is_set():
+                self._ctx.wait_sim(0.02)
+                if self._parts.legs.fallen():
+                    raise PickFailed("fell while reaching")
+        except BaseException:
+            arm.stop()
+            raise
+
+    def grip_opening(self) -> float:
+        return float(self._parts.arm.joint_positions()[humanoid_v1.JOINT_NAMES.index("r_grip")])
+
+    def stand_holding(self) -> None:
+        arm = self._parts.arm
+        self.arm(standing_up_with(carry_moves(), arm.default_stand))
+        arm.release(arm.motion().targets)
+        self._wait_standing()
+
+    def stow_arm(self, finish_in_background: bool = False) -> None:
+        arm = self._parts.arm
+        first, *rest = standing_up_with(arm_back_moves(), arm.default_stand)
+        if finish_in_background:
+            # the hand is out of the camera's view once swung back: the rest (1.6 s) goes on while the next steps run
+            self.arm([first])
+            arm.finish_in_background(rest)
+            return
+        self.arm([first, *rest])
+        arm.release(None)
+        self._wait_standing()
+
+    def _wait_standing(self) -> None:
+        while not self._parts.arm.standing:
+            self._ctx.wait_sim(0.02)
+
+
+def _legs_to(targets: np.ndarray, duration_s: float) -> JointMove:
+    names = humanoid_v1.JOINT_NAMES
+    return JointMove({n: float(targets[names.index(n)]) for n in humanoid_v1.LEG_JOINTS}, duration_s, "stand up")
+
+
+def standing_up_with(moves: list[Move], stand: np.ndarray) -> list[Move]:
+    """The legs back to the standing posture while the first (joint) arm move plays: one move, not two in a row
+    (1.2-1.5 s saved each time the robot stands up from a reach)."""
+    first, *rest = moves
+    if not isinstance(first, JointMove):
+        raise TypeError("standing up goes with a joint move: a hand move would have the solver move the legs")
+    legs = _legs_to(stand, STAND_UP_S)
+    both = JointMove(
+        {**legs.positions, **first.positions}, max(STAND_UP_S, first.duration_s), f"stand up, {first.label}"
+    )
+    return [both, *rest]
+
+
+def arm_back_moves() -> list[Move]:
+    """The arm-out moves in reverse, ending in the standing arm posture with the gripper closed."""
+    stand = humanoid_v1.stand_posture()
+    return [
+        JointMove({**SWING_BACK, "r_grip": 0.0}, 1.2, "swing back"),
+        JointMove({"r_el": 0.0, "r_wrist": 0.0, "r_sho_pitch": 0.0}, 0.8, "unfold upright"),
+        JointMove({n: stand[n] for n in ("r_sho_roll", "l_sho_pitch", "l_sho_roll", "l_el")}, 0.8, "arms down"),
+    ]

@@ -1,0 +1,201 @@
+"""Walking to a place or a pose on the robot's own map: the legs and the map as the navigator uses them
+(`LegsAndMap`), and the `navigate_to` step, which stops where the next step's work can be done."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+from robot.control.head import DEFAULT_TILT
+from robot.control.locomotion import Velocity, clip_velocity
+from robot.interface import NavigationState
+from robot.manipulation.grasp_plan import CARRY_HAND_AHEAD_M
+from robot.model.world import ROBOT_RADIUS, Place, WorldLayout
+from robot.navigation.costmap import Costmap
+from robot.navigation.follower import MAX_FORWARD_M_S
+from robot.navigation.goal import parse_pose_goal
+from robot.navigation.navigator import (
+    CARRYING_CLEARANCE_M,
+    CLEARANCE_M,
+    OPEN_M_S,
+    NavigationFailed,
+    Navigator,
+    StopDrift,
+)
+from robot.perception.geometry import yaw_of
+from robot.planning.executor import ExecutionContext, StepFailed
+from robot.planning.world_context import WorldContext
+from robot.skills.body import BodyParts, Legs, Localiser, PerceptionView
+
+CARRY_CLEARANCE_M = 0.02  # between the carried object and a surface's edge, before turning away from it
+MIN_STEP_BACK_M = 0.04
+
+# Where to stop at a place (x, y, heading), and whether a stop short of it will do for the work there (asked at
+# each stop), for the step after the walk.
+WorkPose = Callable[[Place, ExecutionContext], tuple[tuple[float, float, float], Callable[[], bool] | None]]
+
+
+class LegsAndMap:
+    """The legs and the map as navigation uses them (the navigator's `NavBody`), in simulated time."""
+
+    def __init__(
+        self, legs: Legs, localiser: Localiser, perception: PerceptionView | None, ctx: ExecutionContext
+    ) -> None:
+        self._legs = legs
+        self._localiser = localiser
+        self._perception = perception
+        self._ctx = ctx
+        self._scans = -1  # the map the costmaps below were grown from
+        self._costmaps: dict[float, Costmap] = {}  # by inflation: navigation asks for a few each scan
+
+    def pose(self) -> tuple[float, float, float]:
+        position, rotation = self._localiser.map_trunk()
+        return float(position[0]), float(position[1]), yaw_of(rotation)
+
+    def costmap(self, inflate_m: float) -> Costmap | None:
+        grid = self._perception.feed().map if self._perception is not None else None
+        if grid is None:
+            return None
+        if grid.scans != self._scans:
+            self._scans, self._costmaps = grid.scans, {}
+        if inflate_m not in self._costmaps:
+            self._costmaps[inflate_m] = Costmap.from_map(grid, inflate_m)
+        return self._costmaps[inflate_m]
+
+    def drive(self, vx: float, vy: float, yaw_rate: float) -> None:
+        self._legs.drive(clip_velocity(Velocity(vx, vy, yaw_rate), self._legs.limits))
+
+    def halt_here(self) -> None:
+        self._legs.halt_here()
+
+    def wait(self, seconds: float) -> None:
+        self._ctx.wait_sim(seconds)
+
+    def walking(self) -> bool:
+        return self._legs.moving
+
+    def fallen(self) -> bool:
+        return self._legs.fallen()
+
+
+class NavigateSkill:
+    """The `navigate_to` step, and navigators for the other steps that walk (sharing what stops have taught).
+    `work_pose`: where to stop for the next step's work (manipulation knows)."""
+
+    def __init__(
+        self,
+        parts: BodyParts,
+        layout: WorldLayout,
+        world: Callable[[], WorldContext],
+        publish: Callable[..., Any],
+        work_pose: WorkPose,
+    ) -> None:
+        self._parts = parts
+        self._layout = layout
+        self._world = world
+        self._publish = publish
+        self._work_pose = work_pose
+        self._stop_drift = StopDrift()  # what stopping a walk does to the pose, learnt by every final approach
+        self._navigation: NavigationState | None = None
+
+    @property
+    def navigation(self) -> NavigationState | None:
+        """The walk under way (path, goal), for the state; None when not navigating."""
+        return self._navigation
+
+    def set_navigation(self, navigation: NavigationState | None) -> None:
+        self._navigation = navigation
+
+    def end(self) -> None:
+        """A step that walked has ended (done, failed or cancelled): the legs stop, the walk is over."""
+        self._parts.legs.drive(Velocity())
+        self._navigation = None
+
+    def legs_and_map(self, ctx: ExecutionContext) -> LegsAndMap:
+        p = self._parts
+        return LegsAndMap(p.legs, p.localiser, p.perception, ctx)
+
+    def navigator(self, ctx: ExecutionContext) -> Navigator:
+        """A navigator on this robot's legs and map, sharing what its stops have taught (`StopDrift`), keeping a
+        wider berth from obstacles while it carries something."""
+        carrying = self._parts.arm.held is not None
+        clearance = CARRYING_CLEARANCE_M if carrying else CLEARANCE_M
+        speed = MAX_FORWARD_M_S if carrying else OPEN_M_S
+        clock = self._parts.clock
+        return Navigator(self.legs_and_map(ctx), clock.now, self.set_navigation, self._stop_drift, clearance, speed)
+
+    def navigate_to(self, args: dict[str, str], ctx: ExecutionContext) -> str:
+        """Walk to a named place: a planned path to the open floor in front of it, then a short precise
+        approach."""
+        if self._parts.perception is None:
+            raise StepFailed("navigation needs the lidar's map, and perception is off in this worker")
+        name = self._world().resolve_place(args["target"])
+        place = next((p for p in self._layout.places if p.name == name), None)
+        pose = parse_pose_goal(args["target"]) if place is None else None
+        if place is None and pose is None:
+            raise StepFailed(f"unknown place {args['target']!r}")
+        self._parts.head.point(0.0, DEFAULT_TILT)  # look ahead and down while walking
+        try:
+            navigator = self.navigator(ctx)
+            if pose is not None:  # a pose on the map: walk there, then turn to its heading if it has one
+                costmap = self.legs_and_map(ctx).costmap(ROBOT_RADIUS)
+                if costmap is not None and costmap.blocked_at(pose.x, pose.y):
+                    raise StepFailed(f"unreachable: ({pose.text()}) is in or against an obstacle on the map")
+                final = None if pose.yaw is None else (pose.x, pose.y, pose.yaw)
+                report = navigator.go((pose.x, pose.y), final, back_away_m=self.back_away_m(ctx))
+            else:
+                assert place is not None
+                # whether a stop will do for the work there, by the latest answer (the navigator asks on the way)
+                work: list[Callable[[], bool] | None] = [None]
+
+                def work_pose() -> tuple[float, float, float]:
+                    stance, work[0] = self._work_pose(place, ctx)
+                    return stance
+
+                def in_reach() -> bool:
+                    good_stop = work[0]
+                    return good_stop is not None and good_stop()
+
+                report = navigator.go(place.staging, work_pose, in_reach, self.back_away_m(ctx))
+        except NavigationFailed as exc:
+            raise StepFailed(str(exc)) from exc
+        finally:
+            self.end()
+        replans = f", {report.replans} replan{'s' if report.replans != 1 else ''}" if report.replans else ""
+        where = f"the {place.name}" if place is not None else f"({pose.text()})" if pose is not None else ""
+        self._publish(
+            "navigation/arrived",
+            f"at {where}",
+            place=place.name if place else None,
+            goal=pose.text() if pose else None,
+            walked_m=report.walked_m,
+            replans=report.replans,
+            error_m=report.final_error_m,
+            sim_s=report.sim_s,
+            path=[list(p) for p in report.path],
+        )
+        return (
+            f"at {where}: walked {report.walked_m:.2f} m in {report.sim_s:.0f} s{replans}, "
+            f"{report.final_error_m * 100:.1f} cm and {report.final_heading_error_deg:.0f} deg from the goal"
+        )
+
+    def back_away_m(self, ctx: ExecutionContext) -> float:
+        """How far to walk back before setting off: carrying something held out over a surface, the robot would
+        sweep it along the surface as it turns away (the walk backs away first, without stopping)."""
+        if self._parts.arm.held is None:
+            return 0.0
+        return carry_back_away_m(self._layout, self.legs_and_map(ctx).pose())
+
+
+def carry_back_away_m(layout: WorldLayout, pose: tuple[float, float, float]) -> float:
+    """How far a robot carrying something at `pose` must walk back before it turns away: the object, held out
+    ahead, would otherwise sweep along the surface in front of it (0 when it is clear already)."""
+    back = CARRY_HAND_AHEAD_M + CARRY_CLEARANCE_M - _surface_ahead_m(layout, *pose)
+    return back if back >= MIN_STEP_BACK_M else 0.0
+
+
+def _surface_ahead_m(layout: WorldLayout, x: float, y: float, yaw: float) -> float:
+    """How far ahead of (x, y), looking along `yaw`, the nearest raised surface begins (inf if none)."""
+    surfaces = [p.surface for p in layout.places if p.surface is not None and p.surface.height >= 0.05]
+    return min((box.distance_along(x, y, yaw) for box in surfaces), default=math.inf)
