@@ -9,7 +9,7 @@ PORT ?= 8000
 export HOST PORT
 
 RUN_DEBS := libgl1 libegl1 libportaudio2 espeak-ng
-TEST_DEBS := $(RUN_DEBS) chromium postgresql
+TEST_DEBS := $(RUN_DEBS) chromium postgresql iproute2 ethtool
 
 .PHONY: run test lint bench setup setup-test deps-run deps-test clean
 
