@@ -21,7 +21,7 @@ def test_frames_far_apart_are_delayed_by_the_delay_give_or_take_the_jitter() -> 
         arrived = n * 1.0  # (far apart: no frame waits behind another)
         assert line.admit(frame(n), arrived)
         departure = line.next_departure()
-        assert line.due(arrived + 1.0) == [frame(n)]
+        assert [f for _, f in line.due(arrived + 1.0)] == [frame(n)]
         delays.append(departure - arrived)
     assert min(delays) >= 0.015 - 1e-9
     assert max(delays) <= 0.025 + 1e-9
@@ -36,9 +36,10 @@ def test_frames_close_together_leave_in_order_and_none_before_its_time() -> None
     out, now = [], 0.0
     while line.next_departure() is not None:
         now += 0.001
-        for f in line.due(now):
+        for late, f in line.due(now):
             n = int.from_bytes(f[14:18], "big")
             assert now >= arrivals[n] + 0.015  # never early
+            assert 0.0 <= late < 0.001 + 1e-9  # (and said how late, here at most the step)
             out.append(n)
     assert out == list(range(400))
 
