@@ -42,6 +42,8 @@ from app.bench.core import _percentiles
 from app.bench.impaired_link import ImpairedLink, LinkProfile, Side, unavailable_reason
 from app.bench.network_client import TOKEN_ENV
 from app.bench.server import ServerProcess
+from app.settings import Settings
+from robot.perception.service import SENSOR_HZ
 
 TARGETS = {
     "estop_p99_ms": 60.0,
@@ -49,6 +51,7 @@ TARGETS = {
     "viewer_mbit_s": 2.0,
     "viewer_state_rate_of_no_link": 0.95,  # the state rate holds over the link (as a share of the unlinked viewer's)
 }
+STATE_HZ = Settings.model_fields["ws_state_hz"].default  # what a page is sent at default settings
 CLIENT = [sys.executable, "-m", "app.bench.network_client"]
 STOP_KINDS = frozenset({"teleop/deadman", "teleop/stop"})
 WATCHED = ("estop/latched", "teleop/started", "teleop/ended", *sorted(STOP_KINDS))
@@ -217,12 +220,26 @@ def estop_presses(far: FarEnd, presses: int, ws_only: bool, seed: int) -> dict[s
     """`presses` e-stops as the page sends them (or on `/ws` only), each released once acknowledged."""
     args = ["--presses", str(presses), "--seed", str(seed)] + (["--ws-only"] if ws_only else [])
     result = far.run("estop", *args)
-    latencies = [p["latency_ms"] for p in result["presses"]]
+    latched = [p for p in result["presses"] if p["latency_ms"] is not None]
+    latencies = [p["latency_ms"] for p in latched]
+    in_server = [p["server_latency_ms"] for p in latched]
+    slowest = sorted(latched, key=lambda p: -p["latency_ms"])[:5]
     return {
         "paths": result["paths"],
         "latency_ms": _percentiles(latencies),
-        "first_path": dict(Counter(p["source"] for p in result["presses"])),
+        "missed": len(result["presses"]) - len(latched),  # no latch within 10 s
+        "first_path": dict(Counter(p["source"] for p in latched)),
         "over_100_ms": sum(1 for v in latencies if v > 100.0),
+        # where the time went: the press to the web server taking it (the link, and both ends' scheduling), and
+        # from there to the control loop applying it (the server's relay and the robot process)
+        "parts_ms": {
+            "press_to_server": _percentiles([a - b for a, b in zip(latencies, in_server, strict=True)]),
+            "server_to_applied": _percentiles(in_server),
+        },
+        "slowest": [
+            {"ms": round(p["latency_ms"], 1), "in_server_ms": round(p["server_latency_ms"], 1), "first": p["source"]}
+            for p in slowest
+        ],
     }
 
 
@@ -305,7 +322,29 @@ def viewers_side_by_side(ends: Ends, link: ImpairedLink, settle_s: float, second
     down = after["server_to_operator"]["bytes"] - before["server_to_operator"]["bytes"]
     dropped = after["rate_limiter"]["drops"] - before["rate_limiter"]["drops"]
     over["wire"] = {"mbit_s": round(down * 8 / window / 1e6, 3), "frames_dropped_at_the_limit": dropped}
-    return {"over_the_link": over, "no_link": demand, "while": f"driven from the server's side: {drive}"}
+    return {
+        "over_the_link": over,
+        "no_link": demand,
+        "at_nominal_rates": at_nominal_rates(demand, wire_overhead=over["wire"]["mbit_s"] / max(over["mbit_s"], 1e-9)),
+        "while": f"driven from the server's side: {drive}",
+    }
+
+
+def at_nominal_rates(viewer: dict[str, Any], wire_overhead: float) -> dict[str, float]:
+    """What `viewer` would be sent if the state and the camera ran at their nominal rates (a loaded machine sends
+    fewer of both, which would flatter the figure), on the wire (TCP/IP and Ethernet headers included)."""
+    streams = viewer["streams"]
+    per_state = streams["robot"]["bytes_per_s"] / viewer["state_hz"] if viewer["state_hz"] else 0.0
+    per_frame = streams["camera"]["bytes_per_s"] / viewer["camera_fps"] if viewer["camera_fps"] else 0.0
+    app_bytes = per_state * STATE_HZ + per_frame * SENSOR_HZ + streams["scene"]["bytes_per_s"]
+    return {
+        "state_hz": STATE_HZ,
+        "camera_fps": SENSOR_HZ,
+        "state_kb_each": round(per_state / 1e3, 2),  # (with the diagnostics and events that come between)
+        "camera_kb_per_frame": round(per_frame / 1e3, 2),
+        "wire_overhead": round(wire_overhead, 3),
+        "mbit_s": round(app_bytes * 8 * wire_overhead / 1e6, 3),
+    }
 
 
 def run_network(presses: int = 100, cuts: int = 6, viewer_seconds: float = 20.0, seed: int = 0) -> dict[str, Any]:
@@ -331,7 +370,7 @@ def run_network(presses: int = 100, cuts: int = 6, viewer_seconds: float = 20.0,
     }
     if reason := unavailable_reason():
         return {**result, "skipped": reason}
-    started = time.monotonic()
+    started, load_before = time.monotonic(), os.getloadavg()
     with tempfile.TemporaryDirectory() as tmp, ImpairedLink(profile) as link, served_across(link, Path(tmp)) as ends:
         result["rtt_ms"] = {
             "e_stop_socket": round_trips(ends.operator, "/ws/stop", 100),
@@ -345,12 +384,16 @@ def run_network(presses: int = 100, cuts: int = 6, viewer_seconds: float = 20.0,
         result["viewer"] = viewers_side_by_side(ends, link, VIEWER_SETTLE_S, viewer_seconds)
         result["link_counters"] = link.counters()
     result["elapsed_s"] = round(time.monotonic() - started, 1)
+    # (other work on the machine delays both ends: a figure missed under load is checked on an idle machine)
+    result["machine"]["load_average_1min"] = {"before": load_before[0], "after": os.getloadavg()[0]}
     cut = result["teleop_cut"]
-    over, demand = result["viewer"]["over_the_link"], result["viewer"]["no_link"]
+    over, demand, nominal = (result["viewer"][k] for k in ("over_the_link", "no_link", "at_nominal_rates"))
     result["pass"] = {
-        "estop_p99": result["estop"]["as_the_page"]["latency_ms"]["p99"] <= TARGETS["estop_p99_ms"],
+        "estop_p99": result["estop"]["as_the_page"]["latency_ms"]["p99"] <= TARGETS["estop_p99_ms"]
+        and result["estop"]["as_the_page"]["missed"] == 0,
         "cut_to_stopping": None not in cut["cut_to_stopping_ms"] and cut["max_ms"] <= TARGETS["cut_to_stopping_max_ms"],
-        "viewer_bandwidth": max(demand["mbit_s"], over["wire"]["mbit_s"]) <= TARGETS["viewer_mbit_s"],
+        "viewer_bandwidth": max(demand["mbit_s"], over["wire"]["mbit_s"], nominal["mbit_s"])
+        <= TARGETS["viewer_mbit_s"],
         "viewer_state_rate": over["state_hz"] >= TARGETS["viewer_state_rate_of_no_link"] * demand["state_hz"],
     }
     return result

@@ -39,6 +39,8 @@ import viser
 import websockets
 from viser._messages import ViewerCameraMessage
 
+from robot.interface import Refusal
+
 TOKEN_ENV = "HUMANOID_BENCH_TOKEN"
 HEARTBEAT_S = 0.25  # as the page
 PAGE_PING_S = 2.0  # as the page's link badge
@@ -219,10 +221,10 @@ async def view(base: str, host: str, settle_s: float, seconds: float) -> dict[st
 
 @dataclass
 class Press:
-    latency_ms: float
-    source: str
-    server_latency_ms: float | None
-    acked: int  # sockets that acknowledged it
+    latency_ms: float | None  # None: the robot did not latch within WAIT_S (a lost e-stop)
+    source: str = ""
+    server_latency_ms: float | None = None
+    acked: int = 0  # sockets that acknowledged it
 
 
 class OperatorPage:
@@ -268,29 +270,34 @@ class OperatorPage:
         until = time.monotonic() + WAIT_S
         latched: dict[str, Any] | None = None
         acked = 0
-        while latched is None or acked < 1:  # the latch (an event) and /ws's acknowledgement
-            message = await self.next_message({"event", "estop_ack"}, until)
-            if message["type"] == "estop_ack":
+        try:
+            while latched is None or acked < 1:  # the latch (an event) and /ws's acknowledgement
+                message = await self.next_message({"event", "estop_ack"}, until)
+                if message["type"] == "estop_ack":
+                    acked += 1
+                elif message["event"]["kind"] == "estop/latched":
+                    latched = message["event"]
+            if self.stop_ws is not None:  # released only once the second copy is in (else it would latch again)
+                await asyncio.wait_for(self.stop_acks.get(), timeout=max(0.0, until - time.monotonic()))
                 acked += 1
-            elif message["event"]["kind"] == "estop/latched":
-                latched = message["event"]
-        if self.stop_ws is not None:  # released only once the second copy is in (else it would latch again)
-            await asyncio.wait_for(self.stop_acks.get(), timeout=max(0.0, until - time.monotonic()))
-            acked += 1
+        except TimeoutError:
+            if latched is None:
+                return Press(None, acked=acked)
         data = latched["data"]
         return Press(float(data["latency_ms"]), str(data.get("source", "")), data.get("server_latency_ms"), acked)
 
     async def release(self) -> None:
-        await self.ws.send('{"type":"estop_release"}')
+        """Release, and wait for the robot's answer (sent once it has applied it: a state may be older). Asked
+        again while the robot says not yet (the stop still being applied, a passing fault)."""
         until = time.monotonic() + WAIT_S
         while True:
-            message = await self.next_message({"state", "estop_release_ack", "error"}, until)
-            if message["type"] == "state" and not message["state"]["estop_latched"]:
+            await self.ws.send('{"type":"estop_release"}')
+            message = await self.next_message({"estop_release_ack", "error"}, until)
+            if message.get("accepted") or message.get("refusal") == Refusal.NOT_LATCHED.value:
                 return
-            if message["type"] == "estop_release_ack" and not message.get("accepted", True):
+            if message["type"] == "error" or time.monotonic() > until:
                 raise RuntimeError(f"release refused: {message.get('message')}")
-            if message["type"] == "error":
-                raise RuntimeError(f"release refused: {message.get('message')}")
+            await asyncio.sleep(0.2)
 
 
 async def estop(base: str, host: str, presses: int, both: bool, views: bool, seed: int) -> dict[str, Any]:
