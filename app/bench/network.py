@@ -54,7 +54,9 @@ TARGETS = {
 STATE_HZ = Settings.model_fields["ws_state_hz"].default  # what a page is sent at default settings
 CLIENT = [sys.executable, "-m", "app.bench.network_client"]
 STOP_KINDS = frozenset({"teleop/deadman", "teleop/stop"})
-WATCHED = ("estop/latched", "teleop/started", "teleop/ended", *sorted(STOP_KINDS))
+# what would spoil a run, said in it: the robot process died or restarted, the robot fell or stopped itself
+INCIDENTS = frozenset({"worker/died", "worker/restarted", "robot/fell", "diagnostics/safe_stop"})
+WATCHED = ("estop/latched", "teleop/started", "teleop/ended", *sorted(STOP_KINDS), *sorted(INCIDENTS))
 DRIVE_BEFORE_CUT_S = 1.5
 CUT_HOLD_S = 1.0  # the link stays cut at least this long (well past the deadman), and until the walk has ended
 EVENT_TIMEOUT_S = 20.0
@@ -114,6 +116,7 @@ class EventWatch:
 
     def __init__(self, process: subprocess.Popen) -> None:
         self.process = process
+        self.incidents: list[str] = []  # the robot process died or restarted, the robot fell
         self._events: queue.Queue[dict[str, Any]] = queue.Queue()
         first = process.stdout.readline()  # type: ignore[union-attr]
         if not first or not json.loads(first).get("ready"):
@@ -125,6 +128,8 @@ class EventWatch:
             message = json.loads(line)
             if "event" in message:
                 self._events.put(message["event"])
+                if message["event"]["kind"] in INCIDENTS:
+                    self.incidents.append(f"{message['event']['kind']}: {message['event']['message']}")
 
     def close(self) -> None:
         self.process.terminate()
@@ -230,14 +235,20 @@ def estop_presses(far: FarEnd, presses: int, ws_only: bool, seed: int) -> dict[s
         "missed": len(result["presses"]) - len(latched),  # no latch within 10 s
         "first_path": dict(Counter(p["source"] for p in latched)),
         "over_100_ms": sum(1 for v in latencies if v > 100.0),
-        # where the time went: the press to the web server taking it (the link, and both ends' scheduling), and
-        # from there to the control loop applying it (the server's relay and the robot process)
+        # where the time went: the press to the web server taking it (the client sending it, the link, the server
+        # reading it), and from there to the control loop applying it (the server's relay and the robot process)
         "parts_ms": {
+            "press_to_sent": _percentiles([p["sent_ms"] for p in latched]),
             "press_to_server": _percentiles([a - b for a, b in zip(latencies, in_server, strict=True)]),
             "server_to_applied": _percentiles(in_server),
         },
         "slowest": [
-            {"ms": round(p["latency_ms"], 1), "in_server_ms": round(p["server_latency_ms"], 1), "first": p["source"]}
+            {
+                "ms": round(p["latency_ms"], 1),
+                "sent_ms": round(p["sent_ms"], 1),
+                "in_server_ms": round(p["server_latency_ms"], 1),
+                "first": p["source"],
+            }
             for p in slowest
         ],
     }
@@ -278,7 +289,9 @@ def cut_while_driving(link: ImpairedLink, operator: FarEnd, watch: EventWatch, c
     finally:
         drive = operator.stop("drive", driver)
     if failure is not None:
-        raise RuntimeError(f"{failure}; the driver: {drive}; its log: {operator.log('drive')}") from failure
+        raise RuntimeError(
+            f"{failure}; the driver: {drive}; its log: {operator.log('drive')}; incidents: {watch.incidents}"
+        ) from failure
     measured = [d for d in delays if d is not None]
     return {
         "cut_to_stopping_ms": delays,
@@ -383,6 +396,7 @@ def run_network(presses: int = 100, cuts: int = 6, viewer_seconds: float = 20.0,
         result["teleop_cut"] = cut_while_driving(link, ends.operator, ends.watch, cuts)
         result["viewer"] = viewers_side_by_side(ends, link, VIEWER_SETTLE_S, viewer_seconds)
         result["link_counters"] = link.counters()
+        result["incidents"] = ends.watch.incidents
     result["elapsed_s"] = round(time.monotonic() - started, 1)
     # (other work on the machine delays both ends: a figure missed under load is checked on an idle machine)
     result["machine"]["load_average_1min"] = {"before": load_before[0], "after": os.getloadavg()[0]}

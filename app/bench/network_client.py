@@ -47,6 +47,7 @@ PAGE_PING_S = 2.0  # as the page's link badge
 TELEOP_PERIOD_S = 0.1
 WAIT_S = 10.0
 RECONNECT_S = 0.5
+PRESSES = ("browser", "browser-backup")  # the sources of a page's e-stop, by the path that brought it first
 TELEOP = json.dumps({"type": "teleop", "vx": 0.1, "vy": 0.0, "yaw_rate": 0.3})  # a slow circle (0.33 m radius)
 
 
@@ -225,6 +226,7 @@ class Press:
     source: str = ""
     server_latency_ms: float | None = None
     acked: int = 0  # sockets that acknowledged it
+    sent_ms: float = 0.0  # from the press to both copies handed to the kernel
 
 
 class OperatorPage:
@@ -263,10 +265,12 @@ class OperatorPage:
             self.inbox.get_nowait()
         while not self.stop_acks.empty():
             self.stop_acks.get_nowait()
-        message = json.dumps({"type": "estop", "client_time_s": time.time()})
+        pressed = time.time()
+        message = json.dumps({"type": "estop", "client_time_s": pressed})
         for ws in (self.ws, self.stop_ws):
             if ws is not None:
                 await ws.send(message)
+        sent_ms = (time.time() - pressed) * 1e3  # (this program's own delay, before the link has it)
         until = time.monotonic() + WAIT_S
         latched: dict[str, Any] | None = None
         acked = 0
@@ -275,16 +279,18 @@ class OperatorPage:
                 message = await self.next_message({"event", "estop_ack"}, until)
                 if message["type"] == "estop_ack":
                     acked += 1
-                elif message["event"]["kind"] == "estop/latched":
+                elif message["event"]["kind"] == "estop/latched" and message["event"]["data"].get("source") in PRESSES:
                     latched = message["event"]
             if self.stop_ws is not None:  # released only once the second copy is in (else it would latch again)
                 await asyncio.wait_for(self.stop_acks.get(), timeout=max(0.0, until - time.monotonic()))
                 acked += 1
         except TimeoutError:
             if latched is None:
-                return Press(None, acked=acked)
+                return Press(None, acked=acked, sent_ms=sent_ms)
         data = latched["data"]
-        return Press(float(data["latency_ms"]), str(data.get("source", "")), data.get("server_latency_ms"), acked)
+        return Press(
+            float(data["latency_ms"]), str(data.get("source", "")), data.get("server_latency_ms"), acked, sent_ms
+        )
 
     async def release(self) -> None:
         """Release, and wait for the robot's answer (sent once it has applied it: a state may be older). Asked
@@ -332,6 +338,7 @@ async def drive(base: str) -> dict[str, Any]:
     cut long enough) is opened again, as the page does."""
     stop = _stop_on_sigterm()
     sent = reconnects = refusals = 0
+    reasons: set[str] = set()
     while not stop.is_set():
         try:
             async with _connect(_ws_base(base) + "/ws") as ws:
@@ -349,6 +356,7 @@ async def drive(base: str) -> dict[str, Any]:
                     async for raw in ws:
                         if isinstance(raw, str) and _type_of(raw) == "teleop_ack":
                             refusals += 1
+                            reasons.add(str(json.loads(raw).get("message"))[:120])
 
                 tasks = [
                     asyncio.create_task(c)
@@ -365,7 +373,7 @@ async def drive(base: str) -> dict[str, Any]:
         if not stop.is_set():
             reconnects += 1
             await asyncio.sleep(RECONNECT_S)
-    return {"teleop_sent": sent, "reconnects": reconnects, "refusals": refusals}
+    return {"teleop_sent": sent, "reconnects": reconnects, "refusals": refusals, "refused_because": sorted(reasons)}
 
 
 async def watch(base: str, kinds: set[str]) -> dict[str, Any]:
