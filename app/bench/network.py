@@ -61,6 +61,9 @@ DRIVE_BEFORE_CUT_S = 1.5
 CUT_HOLD_S = 1.0  # the link stays cut at least this long (well past the deadman), and until the walk has ended
 EVENT_TIMEOUT_S = 20.0
 CLIENT_TIMEOUT_S = 600.0
+# full Ethernet frames for full TCP segments (MSS 1448 with timestamps); what a viewer's page reads, on the wire
+# (from the wire's own count instead, a client that reads late moves bytes between windows)
+WIRE_OVERHEAD = 1514 / 1448
 VIEWER_SETTLE_S = 8.0  # a viewer's first scene and camera frames, before its steady rate is measured
 SERVER_START_S = 300.0  # (a loaded machine: the robot's first start derives its model)
 
@@ -316,7 +319,9 @@ def viewers_side_by_side(ends: Ends, link: ImpairedLink, settle_s: float, second
     server sends when no link limits it), watched together while an operator on the server's side drives (a robot
     that moves is what makes the 3D view and the camera send the most). Over the link, the wire's own count of the
     bytes to the viewer too."""
-    driver = ends.local_operator.start("drive")
+    driver = ends.local_operator.start(
+        "drive", "--vx", "0", "--yaw-rate", "0.4"
+    )  # (on the spot: it walks into nothing)
     args = ("--settle", str(settle_s), "--seconds", str(seconds))
     remote, local = ends.viewer.start("view", *args), ends.on_server.start("view", *args)
     try:
@@ -338,12 +343,12 @@ def viewers_side_by_side(ends: Ends, link: ImpairedLink, settle_s: float, second
     return {
         "over_the_link": over,
         "no_link": demand,
-        "at_nominal_rates": at_nominal_rates(demand, wire_overhead=over["wire"]["mbit_s"] / max(over["mbit_s"], 1e-9)),
+        "at_nominal_rates": at_nominal_rates(demand),
         "while": f"driven from the server's side: {drive}",
     }
 
 
-def at_nominal_rates(viewer: dict[str, Any], wire_overhead: float) -> dict[str, float]:
+def at_nominal_rates(viewer: dict[str, Any]) -> dict[str, float]:
     """What `viewer` would be sent if the state and the camera ran at their nominal rates (a loaded machine sends
     fewer of both, which would flatter the figure), on the wire (TCP/IP and Ethernet headers included)."""
     streams = viewer["streams"]
@@ -355,8 +360,7 @@ def at_nominal_rates(viewer: dict[str, Any], wire_overhead: float) -> dict[str, 
         "camera_fps": SENSOR_HZ,
         "state_kb_each": round(per_state / 1e3, 2),  # (with the diagnostics and events that come between)
         "camera_kb_per_frame": round(per_frame / 1e3, 2),
-        "wire_overhead": round(wire_overhead, 3),
-        "mbit_s": round(app_bytes * 8 * wire_overhead / 1e6, 3),
+        "mbit_s": round(app_bytes * 8 * WIRE_OVERHEAD / 1e6, 3),
     }
 
 

@@ -48,7 +48,6 @@ TELEOP_PERIOD_S = 0.1
 WAIT_S = 10.0
 RECONNECT_S = 0.5
 PRESSES = ("browser", "browser-backup")  # the sources of a page's e-stop, by the path that brought it first
-TELEOP = json.dumps({"type": "teleop", "vx": 0.1, "vy": 0.0, "yaw_rate": 0.3})  # a slow circle (0.33 m radius)
 
 
 def _headers() -> dict[str, str]:
@@ -333,19 +332,20 @@ async def estop(base: str, host: str, presses: int, both: bool, views: bool, see
     return {"paths": "/ws + /ws/stop" if both else "/ws", "presses": [asdict(p) for p in results]}
 
 
-async def drive(base: str) -> dict[str, Any]:
+async def drive(base: str, vx: float, yaw_rate: float) -> dict[str, Any]:
     """Teleop at 10 Hz (forward and turning), heartbeats at 4 Hz, until SIGTERM. A socket that fails (the link
     cut long enough) is opened again, as the page does."""
     stop = _stop_on_sigterm()
     sent = reconnects = refusals = 0
     reasons: set[str] = set()
+    teleop_message = json.dumps({"type": "teleop", "vx": vx, "vy": 0.0, "yaw_rate": yaw_rate})
     while not stop.is_set():
         try:
             async with _connect(_ws_base(base) + "/ws") as ws:
 
                 async def teleop(ws: Any = ws) -> None:
                     nonlocal sent
-                    await ws.send(TELEOP)
+                    await ws.send(teleop_message)
                     sent += 1
 
                 async def heartbeat(ws: Any = ws) -> None:
@@ -410,6 +410,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--ws-only", action="store_true", help="estop: on /ws alone (not as the page does)")
     parser.add_argument("--no-views", action="store_true", help="estop: without the camera and 3D view")
     parser.add_argument("--seed", type=int, default=0, help="estop: seed of the pace of the presses")
+    parser.add_argument("--vx", type=float, default=0.1, help="drive: forward speed (m/s)")
+    parser.add_argument("--yaw-rate", type=float, default=0.3, help="drive: turn rate (rad/s)")
     parser.add_argument("--kinds", default="", help="watch: event kinds, comma-separated")
     parser.add_argument("--settle", type=float, default=5.0, help="view: seconds before measuring")
     parser.add_argument("--seconds", type=float, default=20.0, help="view: seconds measured")
@@ -422,7 +424,7 @@ def main(argv: list[str] | None = None) -> int:
     elif args.scenario == "estop":
         result = asyncio.run(estop(args.base, host, args.presses, not args.ws_only, not args.no_views, args.seed))
     elif args.scenario == "drive":
-        result = asyncio.run(drive(args.base))
+        result = asyncio.run(drive(args.base, args.vx, args.yaw_rate))
     elif args.scenario == "watch":
         result = asyncio.run(watch(args.base, {k for k in args.kinds.split(",") if k}))
     else:
