@@ -413,5 +413,7 @@ def run_network(presses: int = 100, cuts: int = 6, viewer_seconds: float = 20.0,
         "viewer_bandwidth": max(demand["mbit_s"], over["wire"]["mbit_s"], nominal["mbit_s"])
         <= TARGETS["viewer_mbit_s"],
         "viewer_state_rate": over["state_hz"] >= TARGETS["viewer_state_rate_of_no_link"] * demand["state_hz"],
+        # the robot neither fell, stopped itself (a control loop starved on a loaded machine) nor restarted
+        "no_incidents": not result["incidents"],
     }
     return result
