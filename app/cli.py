@@ -371,6 +371,7 @@ def build_parser() -> argparse.ArgumentParser:
         "sessions",
         "diagnostics",
         "dynamixel",
+        "network",
     ]
     bench.add_argument("suite", choices=suites)
     bench.add_argument("--json", action="store_true", help="print the JSON result")
@@ -383,12 +384,14 @@ def build_parser() -> argparse.ArgumentParser:
         type=float,
         default=None,
         help="core: seconds of control-loop timing (>= 30 s: the tick window); sessions: seconds per phase; "
-        "diagnostics: seconds of monitoring measured (60); dynamixel: seconds per phase (10); default 30",
+        "diagnostics: seconds of monitoring measured (60); dynamixel: seconds per phase (10); network: seconds each "
+        "viewer is measured (20); default 30",
     )
     bench.add_argument("--session-minutes", type=float, default=10.0, help="sessions: length of the long session")
     bench.add_argument("--scripts", type=int, default=20, help="walk: random velocity scripts to run")
     bench.add_argument("--script-duration", type=float, default=60.0, help="walk: seconds per script")
-    bench.add_argument("--seed", type=int, default=0, help="walk, perception: first seed")
+    bench.add_argument("--seed", type=int, default=0, help="walk, perception: first seed; network: the link's losses")
+    bench.add_argument("--cuts", type=int, default=6, help="network: link cuts while driving")
     bench.add_argument("--realtime-duration", type=float, default=30.0,
                        help="walk, perception: seconds of real-time walking for the tick and rate figures")  # fmt: skip
     bench.add_argument(

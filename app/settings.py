@@ -71,6 +71,13 @@ class Settings(BaseSettings):
         True, description="restart a robot process that dies (e-stop latched, a new session); 3 times in 5 min at most"
     )
     perception: bool = Field(True, description="head camera, detection, lidar and map (about 25 % of one core)")
+    camera_stream_width: int = Field(
+        320,
+        ge=0,
+        le=1920,
+        description="camera frames sent to pages are scaled to this width (the page draws them "
+        "320 px wide; a remote viewer's bandwidth); 0: as the camera takes them",
+    )
 
     # planning: which planner turns commands into plans, and how the executor recovers
     planner_backend: Literal["rules", "openai", "local"] = Field(

@@ -2,7 +2,9 @@
 
 `/ws/camera` streams frames to the page: for each new frame a JSON message {"type": "frame", seq, sim_time_s,
 width, height, detections, camera_hz} followed by one binary message, the JPEG. The detections belong to exactly
-the frame they precede, so overlays never lag the image.
+the frame they precede, so overlays never lag the image; their boxes are in the camera's pixels (width x height),
+while the JPEG is scaled to the page's width (`camera_stream_width`, see `app.camera_stream`). `/api/camera.jpg`
+is the camera's whole image.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import numpy as np
 from fastapi import APIRouter, Depends, HTTPException, Response, WebSocket, WebSocketDisconnect
 
 from app.api.deps import runtime
+from app.camera_stream import PageFrames
 from app.runtime import Runtime
 from robot.interface import CameraImage, OccupancyMap, PerceptionState, ScanView
 
@@ -149,18 +152,28 @@ def _frame_header(app_state: Any, rt: Runtime, frame: CameraImage) -> str:
     return text
 
 
+def _page_frames(app_state: Any, rt: Runtime) -> PageFrames:
+    """The frames as pages are sent them (one for every page, kept on the app)."""
+    frames = getattr(app_state, "camera_page_frames", None)
+    if frames is None:
+        frames = app_state.camera_page_frames = PageFrames(rt.settings.camera_stream_width)
+    return frames
+
+
 @router.websocket("/ws/camera")
 async def camera_socket(ws: WebSocket) -> None:
     rt: Runtime = ws.app.state.runtime
     await ws.accept()
+    frames = _page_frames(ws.app.state, rt)
     last_seq = -1
     try:
         while True:
             frame = rt.worker.sensor_feed().camera
             if frame is not None and frame.seq != last_seq:
                 last_seq = frame.seq
+                jpeg = await frames.jpeg(frame)
                 await ws.send_text(_frame_header(ws.app.state, rt, frame))
-                await ws.send_bytes(frame.jpeg)
+                await ws.send_bytes(jpeg)
             await asyncio.sleep(CAMERA_POLL_S)
     except (WebSocketDisconnect, RuntimeError):
         pass

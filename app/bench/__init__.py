@@ -70,6 +70,12 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
         from app.bench.diagnostics import run_diagnostics
 
         result = run_diagnostics(duration_s=args.duration or 60.0)
+    elif suite == "network":
+        from app.bench.network import run_network
+
+        result = run_network(
+            presses=args.presses, cuts=args.cuts, viewer_seconds=args.duration or 20.0, seed=args.seed or 0
+        )
     elif suite == "voice":
         from app.bench.voice import run_voice
 

@@ -7,6 +7,7 @@ import socket
 import subprocess
 import sys
 import time
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from types import TracebackType
 
@@ -31,16 +32,27 @@ class ServerProcess:
         extra_env: dict[str, str] | None = None,
         servo_port: str | None = None,
         tls: bool = False,
+        host: str = "127.0.0.1",
+        launcher: Sequence[str] = (),
+        ready: Callable[[], bool] | None = None,
+        startup_timeout_s: float = STARTUP_TIMEOUT_S,
     ) -> None:
         """`servo_port`: serve the real robot (`--backend dynamixel`) on that serial device (or the emulator's);
-        `tls`: HTTPS with the robot's own certificate (its CA, `self.ca`, is what clients trust)."""
+        `tls`: HTTPS with the robot's own certificate (its CA, `self.ca`, is what clients trust); `host`: the
+        address to serve on; `launcher`: a command prefix to start it with (e.g. `ip netns exec NS`); `ready`: says
+        when it answers, where this process cannot reach `host` itself (default: `/api/health` answers 200);
+        `startup_timeout_s`: how long it may take to answer."""
         self.workdir = Path(workdir)
         self.port = free_port()
         self.viser_port = free_port()
         self.viser_light_port = free_port()
         self.replay_port = free_port()
         self.tls = tls
-        self.url = f"{'https' if tls else 'http'}://127.0.0.1:{self.port}"
+        self.host = host
+        self.url = f"{'https' if tls else 'http'}://{host}:{self.port}"
+        self._launcher = list(launcher)
+        self._ready = ready or self._answers
+        self._startup_timeout_s = startup_timeout_s
         self.ca = self.workdir / "tls" / "ca.pem"
         self.seed = seed
         self.servo_port = servo_port
@@ -58,36 +70,36 @@ class ServerProcess:
     def __enter__(self) -> ServerProcess:
         self.workdir.mkdir(parents=True, exist_ok=True)
         log = self.log_path.open("a")
+        ports = ["--port", str(self.port)]
+        if self.servo_port:
+            ports = ["--backend", "dynamixel", "--port", self.servo_port, "--http-port", str(self.port)]
         command = [
             sys.executable,
             "-m",
             "app.cli",
             "serve",
-            "--port",
-            str(self.port),
+            "--host",
+            self.host,
+            *ports,
             "--viser-port",
             str(self.viser_port),
             "--seed",
             str(self.seed),
         ]
-        if self.servo_port:
-            command[4:6] = ["--backend", "dynamixel", "--port", self.servo_port, "--http-port", str(self.port)]
         if self.tls:
             command.append("--tls")
-        self._process = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, env=self._env)
-        deadline = time.monotonic() + STARTUP_TIMEOUT_S
+        self._process = subprocess.Popen(
+            [*self._launcher, *command], stdout=log, stderr=subprocess.STDOUT, env=self._env
+        )
+        deadline = time.monotonic() + self._startup_timeout_s
         while time.monotonic() < deadline:
             if self._process.poll() is not None:
                 raise RuntimeError(f"server exited with {self._process.returncode}: {self.log_path.read_text()}")
-            try:
-                with self.http() as client:
-                    if client.get("/api/health", timeout=1.0).status_code == 200:
-                        return self
-            except httpx.HTTPError:
-                pass
+            if self._ready():
+                return self
             time.sleep(0.2)
         self.__exit__(None, None, None)
-        raise RuntimeError(f"server did not start in {STARTUP_TIMEOUT_S} s: {self.log_path.read_text()}")
+        raise RuntimeError(f"server did not start in {self._startup_timeout_s:g} s: {self.log_path.read_text()}")
 
     def __exit__(self, exc_type: type | None, exc: BaseException | None, tb: TracebackType | None) -> None:
         if self._process and self._process.poll() is None:
@@ -97,6 +109,13 @@ class ServerProcess:
             except subprocess.TimeoutExpired:
                 self._process.kill()
                 self._process.wait()
+
+    def _answers(self) -> bool:
+        try:
+            with self.http() as client:
+                return client.get("/api/health", timeout=1.0).status_code == 200
+        except httpx.HTTPError:
+            return False
 
     @property
     def pid(self) -> int:

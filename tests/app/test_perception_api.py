@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
+import cv2
 import numpy as np
 import pytest
 from fastapi.testclient import TestClient
@@ -56,8 +57,12 @@ def test_camera_socket_sends_each_frame_after_its_detections(seeing_client: Test
             assert all(set(d) >= {"label", "confidence", "position", "box"} for d in header["detections"])
             image = ws.receive_bytes()
             assert image[:2] == b"\xff\xd8"
+            # as large as the page draws it (320 px), the boxes still in the camera's 640 x 480 pixels
+            assert cv2.imdecode(np.frombuffer(image, np.uint8), cv2.IMREAD_COLOR).shape == (240, 320, 3)
             seqs.append(header["seq"])
         assert seqs == sorted(seqs) and len(set(seqs)) == 3
+    whole = seeing_client.get("/api/camera.jpg").content
+    assert cv2.imdecode(np.frombuffer(whole, np.uint8), cv2.IMREAD_COLOR).shape == (480, 640, 3)
 
 
 def test_without_perception_the_api_says_why(client: TestClient) -> None:
