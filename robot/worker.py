@@ -298,8 +298,15 @@ class RobotWorker(InProcessPort):
         self._diagnostics.start()
         if self._voice_config is not None:
             world = self._world_context()
-            self._voice = RobotVoice(self._voice_config, world.objects, world.places, self._bus.publish,
-                                     lambda text: self.submit(RunCommand(text)), self._bus.subscribe)  # fmt: skip
+            self._voice = RobotVoice(
+                self._voice_config,
+                world.objects,
+                world.places,
+                self._bus.publish,
+                lambda text: self.submit(RunCommand(text)),
+                self._bus.subscribe,
+                estop=lambda: self.submit(EStop(source="voice")),
+            )
             self._voice.start()
         self._bus.publish("worker/started", f"robot worker started ({'real time' if self.realtime else 'headless'})")
 

@@ -15,7 +15,8 @@ from robot.planning.world_context import WorldContext
 from robot.speech.audio import RATE, Audio, AudioError, add_noise, from_samples, read_wav_bytes
 from robot.speech.denoise import denoise
 from robot.speech.grammar import build_grammar
-from robot.speech.sphinx import AUTO_RUN_CONFIDENCE, PocketSphinxASR
+from robot.speech.asr import AUTO_RUN_CONFIDENCE
+from robot.speech.sphinx import PocketSphinxASR
 from robot.speech.tts import TTSError, synthesize, synthesize_audio
 
 

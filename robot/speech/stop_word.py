@@ -1,0 +1,151 @@
+"""The spoken stop: an utterance that is a stop phrase ("stop", "halt", "freeze", "robot stop", "emergency stop"),
+alone or with a few words ("now", "right now", "please", "hey robot"), latches the e-stop like the button; "stop"
+inside a longer command ("go to the dock and stop there") is an ordinary command.
+
+Two stages, both pocketsphinx, both fed as the audio comes (the robot's microphone hands over each block of speech
+while it is spoken, so the verdict is ready a few milliseconds after the utterance ends):
+
+1. a keyword spotter (keyphrase search, a threshold per phrase) finds where a stop phrase may have been said;
+2. the command grammar (with the stop forms and their few extra words) decodes the whole utterance: only when its
+   sentence is a stop, and not some other command, is the utterance a stop.
+
+The spotter alone could not tell "freeze" from "please" nor "halt" from "walk" (on the development set no threshold
+separated a stop phrase from the words of ordinary commands); the grammar alone heard 95 of 96 stop utterances and
+none of 256 ordinary commands as a stop, but it maps any speech onto some sentence of its own. Together: the
+spotter says a stop word is there, the grammar says nothing else was said. A transcript from another recogniser
+(whisper) is judged by `is_stop_utterance` on its words.
+"""
+
+from __future__ import annotations
+
+import re
+import tempfile
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from robot.planning.world_context import normalize
+from robot.speech.audio import Audio
+from robot.speech.grammar import build_grammar
+
+STOP_PHRASES = ("stop", "halt", "freeze", "robot stop", "emergency stop")
+# Keyphrase thresholds (pocketsphinx compares the phrase's path score against a phone loop with them): loose
+# enough that every stop phrase of the development set was spotted in every voice, clean and at 10 dB of brown
+# noise; the grammar stage rejects what they let through. Longer phrases need lower ones (their scores add up
+# over more frames).
+KWS_THRESHOLDS = {"stop": 1e-25, "halt": 1e-25, "freeze": 1e-25, "robot stop": 1e-40, "emergency stop": 1e-45}
+_BEFORE = r"(?:hey|okay|ok|robot|please|now)"
+_AFTER = r"(?:now|right now|please|it|everything|moving|robot|then)"
+_STOP_UTTERANCE = re.compile(rf"^(?:{_BEFORE} )*(?:{'|'.join(STOP_PHRASES)})(?: (?:stop|halt|freeze))*(?: {_AFTER})*$")
+
+
+def is_stop_utterance(text: str) -> bool:
+    """The words are a stop phrase, alone or with a few of the words people add ("stop right now please")."""
+    return bool(_STOP_UTTERANCE.match(" ".join(normalize(text).split())))
+
+
+@dataclass(frozen=True)
+class Spotted:
+    phrase: str
+    start_s: float
+    end_s: float
+
+
+@dataclass(frozen=True)
+class StopVerdict:
+    stop: bool  # the utterance is a stop: latch the e-stop
+    spotted: tuple[Spotted, ...] = ()  # where the keyword spotter heard a stop phrase
+    heard: str = ""  # the command grammar's sentence
+    decode_s: float = 0.0  # the time to the verdict once the last audio was fed
+
+    def as_dict(self) -> dict[str, object]:
+        return {
+            "stop": self.stop,
+            "spotted": [s.phrase for s in self.spotted],
+            "heard": self.heard,
+            "decode_ms": round(self.decode_s * 1000, 1),
+        }
+
+
+@dataclass
+class _Utterance:
+    started: bool = False
+    samples: int = 0
+
+
+class StopSpotter:
+    """Feed an utterance's audio as it comes (`feed`), then `finish` for the verdict; or `spot` a whole one."""
+
+    def __init__(
+        self,
+        objects: dict[str, tuple[str, ...]],
+        places: dict[str, tuple[str, ...]],
+        thresholds: dict[str, float] | None = None,
+    ) -> None:
+        import pocketsphinx
+
+        model = Path(pocketsphinx.get_model_path()) / "en-us"
+        vocabulary = {line.split(maxsplit=1)[0] for line in (model / "cmudict-en-us.dict").open() if line.strip()}
+        self._dir = tempfile.TemporaryDirectory(prefix="humanoid-stop-")
+        keyphrases = Path(self._dir.name) / "stop.kws"
+        limits = {**KWS_THRESHOLDS, **(thresholds or {})}
+        keyphrases.write_text("".join(f"{phrase} /{limits[phrase]:g}/\n" for phrase in STOP_PHRASES))
+        grammar = build_grammar(objects, places, vocabulary)
+        grammar_path = grammar.write(Path(self._dir.name) / "commands.gram")
+        options = {"loglevel": "FATAL", "dither": False}
+        self._spotter = pocketsphinx.Decoder(kws=str(keyphrases), **options)
+        self._grammar = pocketsphinx.Decoder(
+            jsgf=str(grammar_path), beam=1e-80, wbeam=1e-60, pbeam=1e-80, bestpath=False, **options
+        )
+        self._lock = threading.Lock()
+        self._utterance = _Utterance()
+
+    def feed(self, samples: np.ndarray) -> None:
+        """More of the utterance (16 kHz int16)."""
+        with self._lock:
+            if not self._utterance.started:
+                for decoder in (self._spotter, self._grammar):
+                    decoder.reinit_feat()  # the same verdict for the same audio, whatever came before
+                    decoder.start_utt()
+                self._utterance = _Utterance(started=True)
+            pcm = _dither(samples, self._utterance.samples).astype("<i2").tobytes()
+            for decoder in (self._spotter, self._grammar):
+                decoder.process_raw(pcm, full_utt=False)
+            self._utterance.samples += len(samples)
+
+    def finish(self) -> StopVerdict:
+        """The verdict on what was fed since the last `finish` (no stop for nothing)."""
+        started = time.perf_counter()
+        with self._lock:
+            if not self._utterance.started:
+                return StopVerdict(False)
+            self._utterance = _Utterance()
+            for decoder in (self._spotter, self._grammar):
+                decoder.end_utt()
+            spotted = tuple(
+                Spotted(" ".join(s.word.split()), s.start_frame / 100, s.end_frame / 100)
+                for s in (self._spotter.seg() or ())
+            )
+            hyp = self._grammar.hyp()
+            heard = " ".join(hyp.hypstr.split()) if hyp is not None else ""
+        stop = bool(spotted) and is_stop_utterance(heard)
+        return StopVerdict(stop, spotted, heard, time.perf_counter() - started)
+
+    def spot(self, audio: Audio) -> StopVerdict:
+        started = time.perf_counter()
+        self.feed(audio.samples)
+        verdict = self.finish()
+        return StopVerdict(verdict.stop, verdict.spotted, verdict.heard, time.perf_counter() - started)
+
+
+_DITHER = np.random.default_rng(1).integers(-1, 2, 16000 * 16)
+
+
+def _dither(samples: np.ndarray, offset: int) -> np.ndarray:
+    """One bit of noise, the same at the same place in an utterance however the utterance is cut into blocks:
+    digital silence (the log of zero energy) breaks the decoder's features."""
+    noise = _DITHER[(offset + np.arange(len(samples))) % len(_DITHER)]
+    return np.clip(np.asarray(samples, np.int32) + noise, -32768, 32767).astype(np.int16)
