@@ -372,6 +372,7 @@ def build_parser() -> argparse.ArgumentParser:
         "capstone",
         "planner",
         "voice",
+        "speech",
         "sessions",
         "diagnostics",
         "dynamixel",
@@ -412,6 +413,13 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--repeat", type=int, default=1, help="planner: times each command is planned")
     bench.add_argument("--no-fallback", action="store_true",
                        help="planner: judge an LLM backend alone (no rules fallback)")  # fmt: skip
+    bench.add_argument("--sets", default="dev,heldout", help="speech: spoken sets (dev, heldout), comma-separated")
+    bench.add_argument(
+        "--engines", default="whisper,pocketsphinx", help="speech: recognisers (whisper, pocketsphinx), comma-separated"
+    )
+    bench.add_argument(
+        "--no-robot-microphone", action="store_true", help="speech: leave out the robot microphone's stop timing"
+    )
     bench.set_defaults(func=_bench)
     return parser
 
