@@ -116,9 +116,7 @@ class WhisperASR:
             )
             segments = list(segments)
         text = " ".join(s.text.strip() for s in segments).strip()
-        confidence = (
-            whisper_confidence([s.avg_logprob for s in segments], [s.no_speech_prob for s in segments]) if text else 0.0
-        )
+        confidence = whisper_confidence([s.avg_logprob for s in segments]) if text else 0.0
         return Transcript(text, confidence, self.name, False, audio.duration_s, time.perf_counter() - started)
 
 
