@@ -142,7 +142,7 @@ def voice_rig(world, tmp_path):
     """A RobotVoice on fake devices, its real recogniser process, an event bus and a command log."""
     bus, commands, voices = EventBus(), [], []
 
-    def make(samples: np.ndarray, auto_run: bool = True, speaker: bool = False) -> RobotVoice:
+    def make(samples: np.ndarray, auto_run: bool = True, speaker: bool = False, spoken_stop: bool = True) -> RobotVoice:
         FakeInputStream.samples = samples
         FakeOutputStream.written = []
 
@@ -150,9 +150,25 @@ def voice_rig(world, tmp_path):
             commands.append(text)
             return CommandReply(True, "planned", command_id=len(commands))
 
-        config = VoiceConfig(auto_run=auto_run, spool_dir=str(tmp_path / "incoming"))
-        voice = RobotVoice(config, world.objects, world.places, bus.publish, run, bus.subscribe,
-                           FakeInputStream, FakeOutputStream)  # fmt: skip
+        def estop() -> CommandReply:
+            commands.append("E-STOP")
+            return CommandReply(True, "e-stop latched")
+
+        # the grammar recogniser: its transcripts are the commands' own words (whisper's are tested apart)
+        config = VoiceConfig(
+            engine="pocketsphinx", auto_run=auto_run, spoken_stop=spoken_stop, spool_dir=str(tmp_path / "incoming")
+        )
+        voice = RobotVoice(
+            config,
+            world.objects,
+            world.places,
+            bus.publish,
+            run,
+            bus.subscribe,
+            FakeInputStream,
+            FakeOutputStream,
+            estop=estop,
+        )
         voice.start(MIC, SPEAKER if speaker else AudioDevice("output", None, "", 0, "off by setting"))
         voices.append(voice)
         return voice
@@ -177,6 +193,7 @@ def test_a_command_heard_by_the_robot_runs_and_its_recording_is_kept(voice_rig) 
     make(_stream(0.8, _speech("go to the charging dock"), 1.0))
     started = _events(bus, "speech/microphone", 1)[0]
     assert started.level == Level.OK and "test microphone" in started.message
+    assert "a spoken stop latches the e-stop" in started.message and started.data["spoken_stop"]
     heard = _events(bus, "speech/heard", 1)[0].data
     assert heard["text"] == "go to the charging dock" and heard["in_grammar"] and heard["will_run"]
     assert heard["source"] == "robot-mic" and heard["confidence"] >= 0.7
@@ -211,6 +228,36 @@ def test_the_robot_speaks_its_say_steps_and_does_not_obey_its_own_voice(voice_ri
     time.sleep(3.0)
     assert voice.speaker.spoken == 1
     assert commands == [] and not [e for e in bus._history if e.kind == "speech/heard"]
+
+
+def test_a_spoken_stop_latches_the_robots_estop_and_stop_inside_a_command_does_not(voice_rig) -> None:
+    bus, commands, make = voice_rig
+    make(
+        _stream(
+            0.8,
+            _speech("go to the dock and stop there"),
+            1.2,
+            _speech("stop"),
+            1.2,
+            _speech("find the green apple"),
+            1.0,
+        )
+    )
+    heard = [e.data for e in _events(bus, "speech/heard", 3)]
+    assert [h["stop"] for h in heard] == [False, True, False], heard
+    stops = [e.data for e in bus.history() if e.kind == "speech/stop"]
+    assert len(stops) == 1 and stops[0]["stage"] == "spotter" and stops[0]["accepted"], stops
+    # latched once, for the stop alone, before the command heard after it
+    assert commands == ["E-STOP", "find the green apple"], commands
+
+
+def test_with_the_spoken_stop_off_stop_is_an_ordinary_command(voice_rig) -> None:
+    bus, commands, make = voice_rig
+    voice = make(_stream(0.8, _speech("stop"), 1.0), spoken_stop=False)
+    assert _events(bus, "speech/heard", 1)[0].data["stop"] is False
+    _events(bus, "speech/command", 1)
+    assert commands == ["stop"] and not voice.spoken_stop
+    assert "spoken stop" not in _events(bus, "speech/microphone", 1)[0].message
 
 
 def test_the_recogniser_process_answers_like_the_engine_and_reports_a_bad_engine(world) -> None:
