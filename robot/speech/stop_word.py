@@ -2,17 +2,19 @@
 alone or with a few words ("now", "right now", "please", "hey robot"), latches the e-stop like the button; "stop"
 inside a longer command ("go to the dock and stop there") is an ordinary command.
 
-Two stages, both pocketsphinx, both fed as the audio comes (the robot's microphone hands over each block of speech
-while it is spoken, so the verdict is ready a few milliseconds after the utterance ends):
+Two stages, both pocketsphinx:
 
-1. a keyword spotter (keyphrase search, a threshold per phrase) finds where a stop phrase may have been said;
-2. the command grammar (with the stop forms and their few extra words) decodes the whole utterance: only when its
-   sentence is a stop, and not some other command, is the utterance a stop.
+1. a keyword spotter (keyphrase search, a threshold per phrase), fed as the audio comes (the robot's microphone
+   hands over each block of speech while it is spoken), finds where a stop phrase may have been said;
+2. when it found one in an utterance short enough to be a stop with a few words, the command grammar (with the stop
+   forms and their few extra words) decodes the whole utterance, its steady noise taken out and its cepstrum
+   normalised over it: only when its sentence is a stop, and not some other command, is the utterance a stop.
 
 The spotter alone could not tell "freeze" from "please" nor "halt" from "walk" (on the development set no threshold
 separated a stop phrase from the words of ordinary commands); the grammar alone heard 95 of 96 stop utterances and
 none of 256 ordinary commands as a stop, but it maps any speech onto some sentence of its own. Together: the
-spotter says a stop word is there, the grammar says nothing else was said. A transcript from another recogniser
+spotter says a stop word is there, the grammar says nothing else was said. (Decoding the grammar as the audio came
+instead, with the cepstrum normalised on the fly, heard only 88 of the 96.) A transcript from another recogniser
 (whisper) is judged by `is_stop_utterance` on its words.
 """
 
@@ -29,7 +31,6 @@ import numpy as np
 
 from robot.planning.world_context import normalize
 from robot.speech.audio import Audio
-from robot.speech.grammar import build_grammar
 
 STOP_PHRASES = ("stop", "halt", "freeze", "robot stop", "emergency stop")
 # Keyphrase thresholds (pocketsphinx compares the phrase's path score against a phone loop with them): loose
@@ -37,6 +38,7 @@ STOP_PHRASES = ("stop", "halt", "freeze", "robot stop", "emergency stop")
 # noise; the grammar stage rejects what they let through. Longer phrases need lower ones (their scores add up
 # over more frames).
 KWS_THRESHOLDS = {"stop": 1e-25, "halt": 1e-25, "freeze": 1e-25, "robot stop": 1e-40, "emergency stop": 1e-45}
+MAX_STOP_UTTERANCE_S = 3.5  # longer is no stop "with a few words" (with the quiet around it a recording keeps)
 _BEFORE = r"(?:hey|okay|ok|robot|please|now)"
 _AFTER = r"(?:now|right now|please|it|everything|moving|robot|then)"
 _STOP_UTTERANCE = re.compile(rf"^(?:{_BEFORE} )*(?:{'|'.join(STOP_PHRASES)})(?: (?:stop|halt|freeze))*(?: {_AFTER})*$")
@@ -70,12 +72,6 @@ class StopVerdict:
         }
 
 
-@dataclass
-class _Utterance:
-    started: bool = False
-    samples: int = 0
-
-
 class StopSpotter:
     """Feed an utterance's audio as it comes (`feed`), then `finish` for the verdict; or `spot` a whole one."""
 
@@ -87,73 +83,52 @@ class StopSpotter:
     ) -> None:
         import pocketsphinx
 
-        model = Path(pocketsphinx.get_model_path()) / "en-us"
-        vocabulary = {line.split(maxsplit=1)[0] for line in (model / "cmudict-en-us.dict").open() if line.strip()}
+        from robot.speech.sphinx import PocketSphinxASR
+
         self._dir = tempfile.TemporaryDirectory(prefix="humanoid-stop-")
         keyphrases = Path(self._dir.name) / "stop.kws"
         limits = {**KWS_THRESHOLDS, **(thresholds or {})}
         keyphrases.write_text("".join(f"{phrase} /{limits[phrase]:g}/\n" for phrase in STOP_PHRASES))
-        grammar = build_grammar(objects, places, vocabulary)
-        grammar_path = grammar.write(Path(self._dir.name) / "commands.gram")
-        options = {"loglevel": "FATAL", "dither": False}
-        self._spotter = pocketsphinx.Decoder(kws=str(keyphrases), **options)
-        self._grammar = pocketsphinx.Decoder(
-            jsgf=str(grammar_path), beam=1e-80, wbeam=1e-60, pbeam=1e-80, bestpath=False, **options
-        )
+        self._spotter = pocketsphinx.Decoder(kws=str(keyphrases), loglevel="FATAL", dither=False)
+        self._grammar = PocketSphinxASR(objects, places, free_speech=False)
         self._lock = threading.Lock()
-        self._utterance = _Utterance()
-        self._objects, self._places = objects, places
-        self._whole = None  # the grammar recogniser for whole utterances, made when first needed
+        self._pieces: list[np.ndarray] = []
 
     def feed(self, samples: np.ndarray) -> None:
         """More of the utterance (16 kHz int16)."""
         with self._lock:
-            if not self._utterance.started:
-                for decoder in (self._spotter, self._grammar):
-                    decoder.reinit_feat()  # the same verdict for the same audio, whatever came before
-                    decoder.start_utt()
-                self._utterance = _Utterance(started=True)
-            pcm = _dither(samples, self._utterance.samples).astype("<i2").tobytes()
-            for decoder in (self._spotter, self._grammar):
-                decoder.process_raw(pcm, full_utt=False)
-            self._utterance.samples += len(samples)
+            offset = sum(map(len, self._pieces))
+            if not self._pieces:
+                self._spotter.reinit_feat()  # the same verdict for the same audio, whatever came before
+                self._spotter.start_utt()
+            pcm = _dither(samples, offset).astype("<i2").tobytes()
+            self._spotter.process_raw(pcm, full_utt=False)
+            self._pieces.append(np.asarray(samples, np.int16))
 
     def finish(self) -> StopVerdict:
         """The verdict on what was fed since the last `finish` (no stop for nothing)."""
         started = time.perf_counter()
         with self._lock:
-            if not self._utterance.started:
+            if not self._pieces:
                 return StopVerdict(False)
-            self._utterance = _Utterance()
-            for decoder in (self._spotter, self._grammar):
-                decoder.end_utt()
+            audio, self._pieces = Audio(np.concatenate(self._pieces)), []
+            self._spotter.end_utt()
             spotted = tuple(
                 Spotted(" ".join(s.word.split()), s.start_frame / 100, s.end_frame / 100)
                 for s in (self._spotter.seg() or ())
             )
-            hyp = self._grammar.hyp()
-            heard = " ".join(hyp.hypstr.split()) if hyp is not None else ""
+        heard = ""
+        if spotted and audio.duration_s <= MAX_STOP_UTTERANCE_S:
+            heard = self._grammar.command_sentence(audio)
         stop = bool(spotted) and is_stop_utterance(heard)
         return StopVerdict(stop, spotted, heard, time.perf_counter() - started)
 
     def spot(self, audio: Audio) -> StopVerdict:
-        """A whole utterance (the page's recording, a file): as fed, and the grammar heard once more over all of it
-        with the noise taken out and the cepstrum normalised over the utterance (which a stream cannot do; on the
-        development set it heard 95 of 96 stops to the stream's 88, and no ordinary command as one)."""
+        """A whole utterance (the page's recording, a file)."""
         started = time.perf_counter()
         self.feed(audio.samples)
-        streamed = self.finish()
-        whole = self._whole_utterance().transcribe(audio).text
-        heard = whole if is_stop_utterance(whole) else streamed.heard
-        stop = bool(streamed.spotted) and is_stop_utterance(heard)
-        return StopVerdict(stop, streamed.spotted, heard, time.perf_counter() - started)
-
-    def _whole_utterance(self):
-        if self._whole is None:
-            from robot.speech.sphinx import PocketSphinxASR
-
-            self._whole = PocketSphinxASR(self._objects, self._places, free_speech=False)
-        return self._whole
+        verdict = self.finish()
+        return StopVerdict(verdict.stop, verdict.spotted, verdict.heard, time.perf_counter() - started)
 
 
 _DITHER = np.random.default_rng(1).integers(-1, 2, 16000 * 16)
