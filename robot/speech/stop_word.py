@@ -37,7 +37,7 @@ STOP_PHRASES = ("stop", "halt", "freeze", "robot stop", "emergency stop")
 # enough that every stop phrase of the development set was spotted in every voice, clean and at 10 dB of brown
 # noise; the grammar stage rejects what they let through. Longer phrases need lower ones (their scores add up
 # over more frames).
-KWS_THRESHOLDS = {"stop": 1e-25, "halt": 1e-25, "freeze": 1e-25, "robot stop": 1e-40, "emergency stop": 1e-45}
+KWS_THRESHOLDS = {"stop": 1e-40, "halt": 1e-35, "freeze": 1e-25, "robot stop": 1e-60, "emergency stop": 1e-70}
 MAX_STOP_UTTERANCE_S = 3.5  # longer is no stop "with a few words" (with the quiet around it a recording keeps)
 _BEFORE = r"(?:hey|okay|ok|robot|please|now)"
 _AFTER = r"(?:now|right now|please|it|everything|moving|robot|then)"
