@@ -275,6 +275,14 @@ def _latched(client) -> bool:
     return client.get("/api/state").json()["estop_latched"]
 
 
+def _wait_released(client, timeout_s: float = 10.0) -> bool:
+    """The released state reaches the state board with the control loop's next tick."""
+    deadline = time.monotonic() + timeout_s
+    while _latched(client) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    return not _latched(client)
+
+
 def test_a_spoken_stop_from_the_page_latches_the_estop_and_stop_inside_a_command_does_not(client) -> None:
     from robot.speech.tts import synthesize
 
@@ -290,7 +298,7 @@ def test_a_spoken_stop_from_the_page_latches_the_estop_and_stop_inside_a_command
         events = [e for e in client.get("/api/events").json() if e["kind"] == "estop/latched"]
         assert events and events[-1]["data"]["source"] == "voice"
         assert client.post("/api/estop/reset").status_code == 200  # release stays the explicit release
-        assert not _latched(client)
+        assert _wait_released(client)
 
 
 def test_the_spoken_stop_can_be_turned_off(client, monkeypatch) -> None:
@@ -299,7 +307,7 @@ def test_the_spoken_stop_can_be_turned_off(client, monkeypatch) -> None:
     monkeypatch.setattr(client.runtime, "settings", client.runtime.settings.model_copy(update={"spoken_stop": False}))
     assert client.get("/api/config").json()["spoken_stop"] is False
     heard = client.post("/api/speech/transcribe", content=synthesize("stop", "en-us", 150)).json()
-    assert heard["text"] == "stop" and heard["stop_word"] is False and not _latched(client)
+    assert heard["text"].startswith("stop") and heard["stop_word"] is False and not _latched(client)
 
 
 @pytest.fixture
