@@ -315,14 +315,18 @@ def run_robot_microphone_stops(phrases: tuple[str, ...] = ROBOT_STOPS, engine: s
         return {"phrases": len(phrases), "error": voice.microphone_status}
     sent_at, block = streams[0].sent_at, streams[0].block
     ends = [sent_at[min(len(sent_at) - 1, end // block)] for end in speech_ends]
-    latencies = []
-    for at in latched:  # each latch belongs to the last phrase that ended before it
-        before = [end for end in ends if end <= at]
-        if before:
-            latencies.append((at - before[-1]) * 1000)
+    latencies, missed = [], []
+    for i, (text, end) in enumerate(zip(phrases, ends, strict=True)):
+        following = ends[i + 1] if i + 1 < len(ends) else float("inf")
+        mine = [at for at in latched if end <= at < following]  # a latch belongs to the phrase before it
+        if mine:
+            latencies.append((mine[0] - end) * 1000)
+        else:
+            missed.append(text)
     return {
         "phrases": len(phrases),
-        "latched": len(latched),
+        "latched": len(phrases) - len(missed),
+        "missed": missed,
         "spotter_latches": sum(e.data.get("stage") == "spotter" for e in bus.history() if e.kind == "speech/stop"),
         "end_of_word_to_estop_ms": {
             "p50": round(float(np.percentile(latencies, 50)), 1) if latencies else None,

@@ -6,16 +6,17 @@ Two stages, both pocketsphinx:
 
 1. a keyword spotter (keyphrase search, a threshold per phrase), fed as the audio comes (the robot's microphone
    hands over each block of speech while it is spoken), finds where a stop phrase may have been said;
-2. when it found one in an utterance short enough to be a stop with a few words, the command grammar (with the stop
-   forms and their few extra words) decodes the whole utterance, its steady noise taken out and its cepstrum
-   normalised over it: only when its sentence is a stop, and not some other command, is the utterance a stop.
+2. the command grammar (with the stop forms and their few extra words) decodes the utterance, also as it comes: only
+   when its sentence is a stop, and not some other command, is the utterance a stop. When the spotter found a stop
+   phrase but the streamed grammar heard no stop, the utterance (if short enough to be a stop with a few words) is
+   decoded once more whole, its steady noise taken out and its cepstrum normalised over it: slower, and surer.
 
 The spotter alone could not tell "freeze" from "please" nor "halt" from "walk" (on the development set no threshold
 separated a stop phrase from the words of ordinary commands); the grammar alone heard 95 of 96 stop utterances and
 none of 256 ordinary commands as a stop, but it maps any speech onto some sentence of its own. Together: the
-spotter says a stop word is there, the grammar says nothing else was said. (Decoding the grammar as the audio came
-instead, with the cepstrum normalised on the fly, heard only 88 of the 96.) A transcript from another recogniser
-(whisper) is judged by `is_stop_utterance` on its words.
+spotter says a stop word is there, the grammar says nothing else was said. (The streamed grammar, its cepstrum
+normalised on the fly, heard 88 of the 96: the whole-utterance look is for the rest.) A transcript from another
+recogniser (whisper) is judged by `is_stop_utterance` on its words.
 """
 
 from __future__ import annotations
@@ -91,6 +92,11 @@ class StopSpotter:
         keyphrases.write_text("".join(f"{phrase} /{limits[phrase]:g}/\n" for phrase in STOP_PHRASES))
         self._spotter = pocketsphinx.Decoder(kws=str(keyphrases), loglevel="FATAL", dither=False)
         self._grammar = PocketSphinxASR(objects, places, free_speech=False)
+        grammar_path = self._grammar.grammar.write(Path(self._dir.name) / "commands.gram")
+        # the same grammar decoded as the audio comes, with the grammar recogniser's wide beams: the fast verdict
+        self._streamed = pocketsphinx.Decoder(
+            jsgf=str(grammar_path), beam=1e-80, wbeam=1e-60, pbeam=1e-80, bestpath=False, loglevel="FATAL", dither=False
+        )
         self._lock = threading.Lock()
         self._pieces: list[np.ndarray] = []
 
@@ -99,10 +105,12 @@ class StopSpotter:
         with self._lock:
             offset = sum(map(len, self._pieces))
             if not self._pieces:
-                self._spotter.reinit_feat()  # the same verdict for the same audio, whatever came before
-                self._spotter.start_utt()
+                for decoder in (self._spotter, self._streamed):
+                    decoder.reinit_feat()  # the same verdict for the same audio, whatever came before
+                    decoder.start_utt()
             pcm = _dither(samples, offset).astype("<i2").tobytes()
-            self._spotter.process_raw(pcm, full_utt=False)
+            for decoder in (self._spotter, self._streamed):
+                decoder.process_raw(pcm, full_utt=False)
             self._pieces.append(np.asarray(samples, np.int16))
 
     def finish(self) -> StopVerdict:
@@ -112,14 +120,16 @@ class StopSpotter:
             if not self._pieces:
                 return StopVerdict(False)
             audio, self._pieces = Audio(np.concatenate(self._pieces)), []
-            self._spotter.end_utt()
+            for decoder in (self._spotter, self._streamed):
+                decoder.end_utt()
             spotted = tuple(
                 Spotted(" ".join(s.word.split()), s.start_frame / 100, s.end_frame / 100)
                 for s in (self._spotter.seg() or ())
             )
-        heard = ""
-        if spotted and audio.duration_s <= MAX_STOP_UTTERANCE_S:
-            heard = self._grammar.command_sentence(audio)
+            hyp = self._streamed.hyp()
+            heard = " ".join(hyp.hypstr.split()) if hyp is not None else ""
+        if spotted and not is_stop_utterance(heard) and audio.duration_s <= MAX_STOP_UTTERANCE_S:
+            heard = self._grammar.command_sentence(audio)  # the slower, surer look
         stop = bool(spotted) and is_stop_utterance(heard)
         return StopVerdict(stop, spotted, heard, time.perf_counter() - started)
 

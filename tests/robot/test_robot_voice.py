@@ -312,3 +312,27 @@ def test_a_recogniser_that_dies_is_restarted_and_the_robot_listens_on(voice_rig)
     assert failed.level == Level.WARN and "restarting it" in failed.message
     assert _events(bus, "speech/heard", 1)[0].data["text"] == "go to the charging dock"
     assert commands == ["go to the charging dock"]
+
+
+def test_the_speech_bench_times_a_spoken_stop_on_the_robot_microphone() -> None:
+    from app.bench.spoken import run_robot_microphone_stops
+
+    result = run_robot_microphone_stops(("stop", "freeze"), engine="pocketsphinx")
+    assert result["latched"] == 2 and result["missed"] == [], result
+    latency = result["end_of_word_to_estop_ms"]
+    # the voice-activity window (0.2 s) is part of it: never faster than that (its bar is the bench's business)
+    assert 150 < latency["p50"] <= latency["max"], result
+
+
+def test_the_speech_bench_reports_word_errors_plans_and_stops_per_engine() -> None:
+    from app.bench.spoken import run_set, summarise
+    from app.bench.spoken_cases import DEV, SpokenSet
+
+    tiny = SpokenSet("dev", DEV.voices[:1], DEV.commands[:1], DEV.stops[:1], DEV.with_stop[:1])
+    summary = summarise(run_set(tiny, ("whisper", "pocketsphinx"), snrs=(None,)))
+    for engine in ("whisper", "pocketsphinx"):
+        figures = summary["dev"][engine]
+        assert figures["clean"]["utterances"] == 2 and figures["clean"]["wer"] is not None
+        assert figures["stop"]["stop_utterances"] == 1 and figures["stop"]["ordinary_commands"] == 2
+        assert figures["confidence"]["threshold"] == 0.7
+    assert summary["dev"]["whisper"]["stop"]["false_stops"] == 0  # "go to the dock and stop there" is no stop
