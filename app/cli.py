@@ -110,16 +110,20 @@ def _split_port(value: str | None) -> tuple[int | None, str | None]:
 
 
 def _transcribe_file(path: str, engine: str | None, seed: int, settings: Settings) -> dict:
-    """Transcribe an audio file with the world's command grammar; the result as JSON-ready data."""
+    """Transcribe an audio file with the world's names as hints, and say whether it is a spoken stop (as the
+    robot's microphone and the page would: the stop spotter, or the transcript's words)."""
     from robot.model.world import generate_world
     from robot.planning.world_context import WorldContext
     from robot.speech.audio import read_audio
     from robot.speech.engines import build_recognizer
+    from robot.speech.stop_word import StopSpotter, is_stop_utterance
 
     world = WorldContext.from_layout(generate_world(seed))
-    recognizer = build_recognizer(engine or settings.asr_engine, world.objects, world.places,
-                                  settings.whisper_model_dir)  # fmt: skip
-    transcript = recognizer.transcribe(read_audio(path))
+    audio = read_audio(path)
+    engine = engine or settings.asr_engine
+    recognizer = build_recognizer(engine, world.objects, world.places, settings.whisper_model_dir)
+    verdict = StopSpotter(world.objects, world.places).spot(audio)
+    transcript = recognizer.transcribe(audio)
     return {
         "text": transcript.text,
         "confidence": round(transcript.confidence, 3),
@@ -127,6 +131,7 @@ def _transcribe_file(path: str, engine: str | None, seed: int, settings: Setting
         "in_grammar": transcript.in_grammar,
         "audio_s": round(transcript.audio_s, 3),
         "decode_ms": round(transcript.decode_s * 1000, 1),
+        "stop_word": verdict.stop or is_stop_utterance(transcript.text),
     }
 
 
@@ -319,12 +324,18 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--timeout", type=float, default=300.0, help="wall-clock limit in seconds")
     run.set_defaults(func=_run)
 
-    transcribe = sub.add_parser("transcribe", help="speech to text with the world's command grammar")
+    transcribe = sub.add_parser("transcribe", help="speech to text, with the world's names as hints")
     transcribe.add_argument("file", help="a WAV file (other formats with PyAV)")
-    transcribe.add_argument("--engine", choices=["pocketsphinx", "whisper"], default=None,
-                            help="recogniser (default: HUMANOID_ASR_ENGINE, else pocketsphinx)")  # fmt: skip
+    transcribe.add_argument(
+        "--engine",
+        choices=["auto", "pocketsphinx", "whisper"],
+        default=None,
+        help="recogniser (default: HUMANOID_ASR_ENGINE, else auto: whisper when installed, else pocketsphinx)",
+    )
     transcribe.add_argument("--seed", type=int, default=0, help="world seed (its objects and places are listened for)")
-    transcribe.add_argument("--json", action="store_true", help='print {"text": ..., "confidence": ...}')
+    transcribe.add_argument(
+        "--json", action="store_true", help='print {"text": ..., "confidence": ..., "stop_word": ...}'
+    )
     transcribe.set_defaults(func=_transcribe)
 
     plan = sub.add_parser("plan", help="print the validated plan for a command, without moving the robot")
@@ -368,6 +379,7 @@ def build_parser() -> argparse.ArgumentParser:
         "planner",
         "language",
         "voice",
+        "speech",
         "sessions",
         "diagnostics",
         "dynamixel",
@@ -415,6 +427,13 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--repeat", type=int, default=1, help="planner: times each command is planned")
     bench.add_argument(
         "--no-fallback", action="store_true", help="planner, language: judge an LLM backend alone (no rules fallback)"
+    )
+    bench.add_argument("--sets", default="dev,heldout", help="speech: spoken sets (dev, heldout), comma-separated")
+    bench.add_argument(
+        "--engines", default="whisper,pocketsphinx", help="speech: recognisers (whisper, pocketsphinx), comma-separated"
+    )
+    bench.add_argument(
+        "--no-robot-microphone", action="store_true", help="speech: leave out the robot microphone's stop timing"
     )
     bench.set_defaults(func=_bench)
     return parser

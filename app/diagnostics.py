@@ -112,12 +112,15 @@ def _store_status(rt: Runtime) -> DiagnosticStatus:
 
 
 def _browser_asr_status(rt: Runtime) -> DiagnosticStatus:
-    engine = rt.settings.asr_engine
+    from robot.speech.engines import resolve_engine
+    from robot.speech.whisper import model_dir
+
+    engine = resolve_engine(rt.settings.asr_engine, rt.settings.whisper_model_dir)
     if engine == "whisper":
-        directory = rt.settings.whisper_model_dir
+        directory = model_dir(rt.settings.whisper_model_dir)
         if importlib.util.find_spec("faster_whisper") is None:
             return DiagnosticStatus("links/asr", Level.ERROR, "faster-whisper is not installed", engine)
-        if not directory or not os.path.isdir(directory):
+        if directory is None or not os.path.isdir(directory):
             return DiagnosticStatus("links/asr", Level.ERROR, f"no whisper model directory ({directory!r})", engine)
         return DiagnosticStatus("links/asr", Level.OK, f"faster-whisper, model {directory}", engine)
     if importlib.util.find_spec("pocketsphinx") is None:

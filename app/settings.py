@@ -104,8 +104,13 @@ class Settings(BaseSettings):
     approve_plans: bool = Field(False, description="plans wait for the operator's approval before they run")
 
     # speech
-    asr_engine: Literal["pocketsphinx", "whisper"] = Field("pocketsphinx", description="speech recogniser")
-    whisper_model_dir: str = Field("", description="a faster-whisper (CTranslate2) model directory")
+    asr_engine: Literal["auto", "pocketsphinx", "whisper"] = Field(
+        "auto", description="speech recogniser: auto (whisper when installed, else pocketsphinx), pocketsphinx, whisper"
+    )
+    whisper_model_dir: str = Field(
+        "", description="a faster-whisper (CTranslate2) model directory (empty: the one the whisper extra installs)"
+    )
+    spoken_stop: bool = Field(True, description='a spoken "stop", "halt" or "freeze" latches the e-stop')
     asr_timeout_s: float = Field(
         15.0, gt=0, le=120, description="the page's recordings: a recogniser that takes longer is stopped (503)"
     )
@@ -149,9 +154,15 @@ class Settings(BaseSettings):
 
     def voice_config(self) -> VoiceConfig:
         """The robot's microphone and speaker; its recordings wait under the audio directory for the session."""
-        return VoiceConfig(microphone=self.microphone, speaker=self.speaker, engine=self.asr_engine,
-                           whisper_model_dir=self.whisper_model_dir, auto_run=self.voice_auto_run,
-                           spool_dir=str(Path(self.audio_dir) / "incoming"))  # fmt: skip
+        return VoiceConfig(
+            microphone=self.microphone,
+            speaker=self.speaker,
+            engine=self.asr_engine,
+            whisper_model_dir=self.whisper_model_dir,
+            auto_run=self.voice_auto_run,
+            spoken_stop=self.spoken_stop,
+            spool_dir=str(Path(self.audio_dir) / "incoming"),
+        )
 
     def hardware_config(self) -> HardwareConfig:
         """The robot configuration file (the humanoid_v1 defaults when there is none yet), with the port set here."""

@@ -375,6 +375,7 @@ class Robot(InProcessPort):
                 self._events.publish,
                 lambda text: self.submit(RunCommand(text)),
                 self._events.subscribe,
+                estop=lambda: self.submit(EStop(source="voice")),
             )
             self._voice.start()
         how = "real time" if self.realtime else "headless"

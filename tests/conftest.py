@@ -52,8 +52,13 @@ def make_worker(layout: WorldLayout, scene_model: mujoco.MjModel) -> Iterator:
 
 @pytest.fixture
 def settings(tmp_path: Path) -> Settings:
+    # the grammar recogniser unless a test asks for whisper: its transcripts are the commands' own words, and fast
     return Settings(
-        database_url=f"sqlite:///{tmp_path / 'test.db'}", enable_mirror=False, seed=0, audio_dir=str(tmp_path / "audio")
+        database_url=f"sqlite:///{tmp_path / 'test.db'}",
+        enable_mirror=False,
+        seed=0,
+        audio_dir=str(tmp_path / "audio"),
+        asr_engine="pocketsphinx",
     )
 
 

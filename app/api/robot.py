@@ -152,6 +152,7 @@ def config(rt: RuntimeDep) -> dict[str, Any]:
         "planner_backend": rt.settings.planner_backend,
         "microphone": description.microphone,
         "speaker": description.speaker,
+        "spoken_stop": rt.settings.spoken_stop,
         "approval_required": rt.worker.state().approval_required,
         "session_id": rt.recorder.session_id,
         "diagnostics_thresholds": dataclasses.asdict(rt.settings.diagnostics),

@@ -4,20 +4,23 @@ from __future__ import annotations
 
 import logging
 import threading
+import time
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, HTTPException, Query, Request, Response
 from fastapi.concurrency import run_in_threadpool
 
 from app.api.deps import Operator, runtime
+from app.robot_calls import ask
 from app.runtime import Runtime
 from app.sessions.audio_store import save_recording
+from robot.interface import EStop
 from robot.model.world import generate_world
 from robot.planning.world_context import WorldContext
 from robot.speech.asr import ASRError
 from robot.speech.audio import AudioError, from_pcm16, read_wav_bytes
 from robot.speech.recognizer_process import RecognizerProcess
-from robot.speech.sphinx import AUTO_RUN_CONFIDENCE
+from robot.speech.stop_word import is_stop_utterance
 from robot.speech.tts import MAX_TEXT_CHARS, TTSError, synthesize
 
 log = logging.getLogger(__name__)
@@ -30,9 +33,10 @@ _recognizers_lock = threading.Lock()
 
 
 def recognizer(rt: Runtime) -> RecognizerProcess:
-    """One recogniser process per engine and world, started again when it has died or was stopped for hanging.
-    In its own process: a decoder holds the interpreter lock (up to 85 ms a command), which would stall every
-    WebSocket, the e-stop's included; and a hung or crashed decoder must not take the server with it."""
+    """One recogniser process (with the spoken stop's spotter) per engine and world, started again when it has died
+    or was stopped for hanging. In its own process: a decoder holds the interpreter lock (up to 85 ms a command),
+    which would stall every WebSocket, the e-stop's included; and a hung or crashed decoder must not take the server
+    with it."""
     key = (rt.settings.asr_engine, rt.settings.seed)
     with _recognizers_lock:
         current = _recognizers.get(key)
@@ -41,8 +45,9 @@ def recognizer(rt: Runtime) -> RecognizerProcess:
                 log.warning("the speech recogniser process had stopped: starting a new one")
                 current.close()
             world = WorldContext.from_layout(generate_world(rt.settings.seed))
-            _recognizers[key] = RecognizerProcess(rt.settings.asr_engine, world.objects, world.places,
-                                                  rt.settings.whisper_model_dir)  # fmt: skip
+            _recognizers[key] = RecognizerProcess(
+                rt.settings.asr_engine, world.objects, world.places, rt.settings.whisper_model_dir, spotter=True
+            )
         return _recognizers[key]
 
 
@@ -56,7 +61,11 @@ def close_recognizers() -> None:
 @router.post("/transcribe", dependencies=[Operator])
 async def transcribe(request: Request, rt: RuntimeDep) -> dict[str, Any]:
     """The body is a WAV file, or raw 16-bit little-endian PCM (`Content-Type: audio/L16; rate=16000`, as the
-    page's push-to-talk sends). 422 for audio that cannot be read; 503 when the engine cannot run."""
+    page's push-to-talk sends). 422 for audio that cannot be read; 503 when the engine cannot run.
+
+    With the spoken stop on (HUMANOID_SPOKEN_STOP), a recording that is a stop phrase (alone or with a few words)
+    latches the e-stop before it is transcribed, as the button does (`stop_word` true, `estop` the reply); the
+    transcript's words can show it too. "Stop" inside a longer command is an ordinary command."""
     body = await request.body()
     content_type = request.headers.get("content-type", "").lower()
     try:
@@ -73,13 +82,19 @@ async def transcribe(request: Request, rt: RuntimeDep) -> dict[str, Any]:
         )
     # kept with the session before anything can fail: what the operator said is never lost
     path = save_recording(rt.settings.audio_dir, rt.recorder.session_id, audio.wav_bytes())
+    latched = None
     try:
         engine = await run_in_threadpool(recognizer, rt)
+        if rt.settings.spoken_stop:
+            verdict = await run_in_threadpool(engine.spot, audio, rt.settings.asr_timeout_s)
+            latched = await _latch(rt) if verdict.stop else None
         transcript = await run_in_threadpool(engine.transcribe, audio, rt.settings.asr_timeout_s)
     except ASRError as exc:
         log.error("speech recognition failed: %s", exc)
         rt.recorder.record_transcript(_unheard(audio.duration_s, rt.settings.asr_engine), "browser", path)
         raise HTTPException(503, detail={"message": f"speech recognition failed: {exc}"}) from exc
+    if latched is None and rt.settings.spoken_stop and is_stop_utterance(transcript.text):
+        latched = await _latch(rt)
     heard = {
         "text": transcript.text,
         "confidence": round(transcript.confidence, 3),
@@ -88,10 +103,18 @@ async def transcribe(request: Request, rt: RuntimeDep) -> dict[str, Any]:
         "audio_s": round(transcript.audio_s, 3),
         "decode_ms": round(transcript.decode_s * 1000, 1),
         # the page runs it without asking when its operator allows that and the recogniser is this sure
-        "auto_run": bool(transcript.text) and transcript.in_grammar and transcript.confidence >= AUTO_RUN_CONFIDENCE,
+        "auto_run": transcript.sure and latched is None,
+        "stop_word": latched is not None,
+        "estop": latched,
     }
     rt.recorder.record_transcript(heard, "browser", path)
     return heard
+
+
+async def _latch(rt: Runtime) -> str:
+    """The e-stop, latched as the button latches it; its reply's message."""
+    reply = await ask(rt.worker, EStop(source="voice", relayed_at_s=time.time()))
+    return reply.message
 
 
 def _unheard(audio_s: float, engine: str) -> dict[str, Any]:

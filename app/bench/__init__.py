@@ -37,6 +37,12 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
             print(f"unknown capstone task(s) {unknown or args.tasks!r}: choose from {choices}", file=sys.stderr)
             return 2
         result = run_capstone(seeds=args.seeds or 30, seed=args.seed or 0, tasks=tasks, jobs=args.jobs)
+    elif suite == "speech":
+        from app.bench.spoken import run_speech
+
+        sets = tuple(s.strip() for s in args.sets.split(",") if s.strip())
+        engines = tuple(e.strip() for e in args.engines.split(",") if e.strip())
+        result = run_speech(sets=sets, engines=engines, robot_microphone=not args.no_robot_microphone)
     elif suite == "planner":
         from app.bench.planner import parse_backends, run_planner
         from app.settings import get_settings

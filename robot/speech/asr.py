@@ -7,6 +7,10 @@ from typing import Protocol
 
 from robot.speech.audio import Audio
 
+# At or above: a command may run without the operator confirming it ("run when sure"). Each engine's confidence is
+# calibrated as how likely its transcript is to give the plan its words were meant to (see each engine).
+AUTO_RUN_CONFIDENCE = 0.7
+
 
 class ASRError(Exception):
     """The engine cannot run (missing package or model): the message says what to install or set."""
@@ -20,6 +24,11 @@ class Transcript:
     in_grammar: bool  # a whole sentence of the command grammar (an engine without one says False)
     audio_s: float
     decode_s: float
+
+    @property
+    def sure(self) -> bool:
+        """Sure enough to run unasked (when the operator allows it and the planner understands it)."""
+        return bool(self.text) and self.confidence >= AUTO_RUN_CONFIDENCE
 
     @property
     def real_time_factor(self) -> float:

@@ -122,10 +122,25 @@ def _resample(samples: np.ndarray, rate: int, target: int) -> np.ndarray:
     return np.interp(positions, np.arange(len(samples)), samples)
 
 
-def add_noise(audio: Audio, snr_db: float, seed: int = 0) -> Audio:
-    """White noise at a signal-to-noise ratio (speech power over noise power, where there is speech)."""
+def add_noise(audio: Audio, snr_db: float, seed: int = 0, colour: str = "white") -> Audio:
+    """Noise at a signal-to-noise ratio (speech power over noise power, where there is speech): "white" (flat, a
+    hiss) or "brown" (power falling 6 dB an octave, a rumble: a fan, traffic, a motor)."""
     signal = audio.samples.astype(np.float64)
     voiced = signal[np.abs(signal) > 0.02 * np.abs(signal).max()] if len(signal) else signal
     power = float(np.mean(voiced**2)) if len(voiced) else 0.0
-    noise = np.random.default_rng(seed).normal(0.0, np.sqrt(power / 10 ** (snr_db / 10)), len(signal))
+    rng = np.random.default_rng(seed)
+    if colour == "white":
+        noise = rng.normal(0.0, 1.0, len(signal))
+    elif colour == "brown":
+        noise = _brown(rng.normal(0.0, 1.0, len(signal)))
+    else:
+        raise ValueError(f"unknown noise colour {colour!r} (white, brown)")
+    if len(noise):
+        noise *= np.sqrt(power / 10 ** (snr_db / 10) / max(float(np.mean(noise**2)), 1e-12))
     return Audio(np.clip(np.round(signal + noise), -32768, 32767).astype(np.int16))
+
+
+def _brown(white: np.ndarray) -> np.ndarray:
+    """White noise shaped to 1/f^2 power (amplitude 1/f), flat below 20 Hz so it has no drift."""
+    frequencies = np.fft.rfftfreq(len(white), 1.0 / RATE)
+    return np.fft.irfft(np.fft.rfft(white) / np.maximum(frequencies, 20.0), len(white))

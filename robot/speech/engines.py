@@ -1,4 +1,5 @@
-"""Which recogniser: pocketsphinx with the world's command grammar (default), or faster-whisper."""
+"""Which recogniser: faster-whisper (free speech, the default when it and its model are installed) or pocketsphinx
+with the world's command grammar (always there: the fallback)."""
 
 from __future__ import annotations
 
@@ -6,12 +7,23 @@ from typing import Literal
 
 from robot.speech.asr import ASRError, SpeechRecognizer
 
-Engine = Literal["pocketsphinx", "whisper"]
-ENGINES: tuple[Engine, ...] = ("pocketsphinx", "whisper")
+Engine = Literal["auto", "pocketsphinx", "whisper"]
+ENGINES: tuple[Engine, ...] = ("auto", "pocketsphinx", "whisper")
 
 
-def build_recognizer(engine: str, objects: dict[str, tuple[str, ...]], places: dict[str, tuple[str, ...]],
-                     whisper_model_dir: str = "") -> SpeechRecognizer:  # fmt: skip
+def resolve_engine(engine: str, whisper_model_dir: str = "") -> str:
+    """ "auto" is whisper when faster-whisper and a model are installed, else pocketsphinx; others are themselves."""
+    if engine != "auto":
+        return engine
+    from robot.speech.whisper import whisper_installed
+
+    return "whisper" if whisper_installed(whisper_model_dir) else "pocketsphinx"
+
+
+def build_recognizer(
+    engine: str, objects: dict[str, tuple[str, ...]], places: dict[str, tuple[str, ...]], whisper_model_dir: str = ""
+) -> SpeechRecognizer:
+    engine = resolve_engine(engine, whisper_model_dir)
     if engine == "pocketsphinx":
         from robot.speech.sphinx import PocketSphinxASR
 
@@ -19,5 +31,5 @@ def build_recognizer(engine: str, objects: dict[str, tuple[str, ...]], places: d
     if engine == "whisper":
         from robot.speech.whisper import WhisperASR
 
-        return WhisperASR(whisper_model_dir)
+        return WhisperASR(whisper_model_dir, objects, places)
     raise ASRError(f"unknown speech engine {engine!r} (known: {', '.join(ENGINES)})")

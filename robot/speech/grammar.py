@@ -20,11 +20,38 @@ GIVE = ("bring me", "fetch me", "get me", "hand me", "give me", "pass me", "i wa
 CARRY = ("bring", "carry", "deliver", "move", "take", "put", "place", "set", "drop")
 GO = ("go", "walk", "navigate", "head", "move", "drive", "come")
 FIND = ("find", "look for", "search for", "locate", "where is", "do you see", "can you see")
-STOP = ("stop", "halt", "freeze", "cancel", "abort", "stop moving", "stand still", "stop everything")
-LOOK = ("what do you see", "what can you see", "what do you see around you", "what is around you",
-        "describe the scene", "tell me what you see", "look around", "what have you seen")  # fmt: skip
-HOME = ("go home", "go back home", "return home", "come back home", "return to your starting position",
-        "go back to where you started", "go back to your start")  # fmt: skip
+STOP = (
+    "stop",
+    "halt",
+    "freeze",
+    "cancel",
+    "abort",
+    "stop moving",
+    "stand still",
+    "stop everything",
+    "emergency stop",
+    "stop it",
+)
+STOP_AFTER = ("now", "right now")
+LOOK = (
+    "what do you see",
+    "what can you see",
+    "what do you see around you",
+    "what is around you",
+    "describe the scene",
+    "tell me what you see",
+    "look around",
+    "what have you seen",
+)
+HOME = (
+    "go home",
+    "go back home",
+    "return home",
+    "come back home",
+    "return to your starting position",
+    "go back to where you started",
+    "go back to your start",
+)
 POLITE = ("please", "robot", "hey robot", "can you", "could you", "would you")
 
 
@@ -43,8 +70,9 @@ class Grammar:
         return bool(self.pattern.fullmatch(" ".join(normalize(text).split()) + " "))
 
 
-def build_grammar(objects: dict[str, tuple[str, ...]], places: dict[str, tuple[str, ...]],
-                  vocabulary: set[str] | None = None) -> Grammar:  # fmt: skip
+def build_grammar(
+    objects: dict[str, tuple[str, ...]], places: dict[str, tuple[str, ...]], vocabulary: set[str] | None = None
+) -> Grammar:
     """The grammar for a world's objects and places (canonical names and aliases)."""
     left_out: list[str] = []
 
@@ -80,7 +108,7 @@ def build_grammar(objects: dict[str, tuple[str, ...]], places: dict[str, tuple[s
         f"<find> = ({alternatives(FIND)}) <object>;",
         f"<look> = {alternatives(LOOK)};",
         f"<wait> = (wait | pause | stay) [for] ({numbers}) (seconds | second);",
-        f"<stop> = {alternatives(STOP)};",
+        f"<stop> = [okay | ok] ({alternatives(STOP)}) [{alternatives(STOP_AFTER)}];",
     ]
     return Grammar("\n".join(rules) + "\n", tuple(dict.fromkeys(left_out)), _to_regex(rules[2:]))
 

@@ -36,13 +36,15 @@ class Microphone:
         on_utterance: Callable[[Audio], None],
         stream_factory: StreamFactory | None = None,
         detector: UtteranceDetector | None = None,
+        on_speech: Callable[[np.ndarray], None] | None = None,
+        on_discard: Callable[[], None] | None = None,
     ) -> None:
         if not device.available:
             raise ValueError(device.describe())
         self.device = device
         self._on_utterance = on_utterance
         self._stream_factory = stream_factory
-        self._detector = detector or UtteranceDetector()
+        self._detector = detector or UtteranceDetector(on_speech=on_speech, on_discard=on_discard)
         self._blocks: queue.Queue[np.ndarray] = queue.Queue(maxsize=QUEUE_BLOCKS)
         self._stream: Any = None
         self._thread: threading.Thread | None = None
@@ -60,8 +62,14 @@ class Microphone:
 
             factory = sd.InputStream
         self._stop.clear()
-        self._stream = factory(samplerate=self.device.samplerate, channels=1, dtype="int16", device=self.device.index,
-                               blocksize=int(self.device.samplerate * BLOCK_S), callback=self._callback)  # fmt: skip
+        self._stream = factory(
+            samplerate=self.device.samplerate,
+            channels=1,
+            dtype="int16",
+            device=self.device.index,
+            blocksize=int(self.device.samplerate * BLOCK_S),
+            callback=self._callback,
+        )
         self._thread = threading.Thread(target=self._listen, name="robot-microphone", daemon=True)
         self._thread.start()
         self._stream.start()

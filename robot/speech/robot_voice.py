@@ -7,12 +7,19 @@ Events (the worker's bus):
 - `speech/heard`: what the microphone heard (text, confidence, in_grammar, engine, audio_s, decode_ms), whether it
   runs unasked (`will_run`), and `audio_path`, the utterance as WAV for the session store to take.
 - `speech/command`: the reply to a command the robot ran on hearing it (accepted, command_id, refusal, reply).
+- `speech/stop`: a spoken stop latched the e-stop (phrase, heard, stage: "spotter" as the words ended, or
+  "transcript" when only the recogniser's words showed it).
+
+The spoken stop is heard apart from recognition: the microphone hands each piece of speech to the stop spotter's
+own process as it comes, so its verdict is ready as the utterance ends, and the robot latches its e-stop itself
+(`EStop(source="voice")`) without waiting for the recogniser, which decodes on its own thread.
 """
 
 from __future__ import annotations
 
 import itertools
 import logging
+import queue
 import tempfile
 import threading
 import time
@@ -22,27 +29,30 @@ from pathlib import Path
 from typing import Any
 
 from robot.interface import CommandReply, Event, EventSubscription, Level
-from robot.speech.asr import ASRError, SpeechRecognizer
+from robot.speech.asr import ASRError, SpeechRecognizer, Transcript
 from robot.speech.audio import Audio
 from robot.speech.devices import AudioDevice, find_device
 from robot.speech.microphone import Microphone
 from robot.speech.recognizer_process import RecognizerProcess
 from robot.speech.speaker import Speaker
-from robot.speech.sphinx import AUTO_RUN_CONFIDENCE
+from robot.speech.stop_word import StopVerdict, is_stop_utterance
 
 log = logging.getLogger(__name__)
 
 ECHO_TAIL_S = 0.4  # the room rings on after the speaker stops
 SOURCE = "robot-mic"
+STOP_SOURCE = "voice"
+VERDICT_TIMEOUT_S = 2.0  # the spotter's verdict normally takes milliseconds: a hung spotter is restarted
 
 
 @dataclass(frozen=True)
 class VoiceConfig:
     microphone: str = "auto"  # "auto" (the default input device), "off", or a device name or index
     speaker: str = "auto"
-    engine: str = "pocketsphinx"
+    engine: str = "auto"  # whisper when it is installed, else pocketsphinx
     whisper_model_dir: str = ""
     auto_run: bool = True  # run what it hears when the recogniser is sure; else the operator confirms in the page
+    spoken_stop: bool = True  # a spoken "stop" (alone, or with a few words) latches the e-stop
     spool_dir: str = ""  # where heard utterances wait for the session store ("" = a temporary directory)
 
 
@@ -58,6 +68,7 @@ class RobotVoice:
         input_stream: Callable[..., Any] | None = None,  # sounddevice's streams unless given (tests)
         output_stream: Callable[..., Any] | None = None,
         recognizer_factory: Callable[..., SpeechRecognizer] = RecognizerProcess,
+        estop: Callable[[], CommandReply] | None = None,  # latches the e-stop (source "voice")
     ) -> None:
         self.config = config
         self._objects, self._places = objects, places
@@ -67,6 +78,10 @@ class RobotVoice:
         self._input_stream, self._output_stream = input_stream, output_stream
         self._recognizer_factory = recognizer_factory
         self._recognizer: SpeechRecognizer | None = None
+        self._spotter: RecognizerProcess | None = None
+        self._estop = estop
+        self._heard: queue.Queue[tuple[Audio, bool] | None] = queue.Queue(maxsize=20)
+        self._hearing: threading.Thread | None = None
         self.microphone: Microphone | None = None
         self.speaker: Speaker | None = None
         self.microphone_status = "not started"
@@ -90,10 +105,20 @@ class RobotVoice:
         self._start_microphone(microphone or find_device("input", self.config.microphone))
         self._start_speaker(speaker or find_device("output", self.config.speaker))
 
+    @property
+    def spoken_stop(self) -> bool:
+        """A spoken stop is listened for (the setting is on, and the spotter runs)."""
+        return self._spotter is not None
+
     def stop(self) -> None:
         self._stopping.set()
         if self.microphone is not None:
             self.microphone.stop()
+        if self._hearing is not None:
+            self._heard.put(None)
+            self._hearing.join(timeout=10.0)
+        if self._spotter is not None:
+            self._spotter.close()
         if self._say_thread is not None:
             self._say_thread.join(timeout=2.0)
         if self._says is not None:
@@ -109,21 +134,41 @@ class RobotVoice:
         if device.available:
             try:
                 # decoding in its own process: in the worker's it would stall the control loop (see there)
-                self._recognizer = self._recognizer_factory(self.config.engine, self._objects, self._places,
-                                                            self.config.whisper_model_dir)  # fmt: skip
-                self.microphone = Microphone(device, self._on_utterance, self._input_stream)
+                self._recognizer = self._recognizer_factory(
+                    self.config.engine, self._objects, self._places, self.config.whisper_model_dir
+                )
+                if self.config.spoken_stop and self._estop is not None:
+                    self._spotter = RecognizerProcess("", self._objects, self._places, spotter=True)
+                self._hearing = threading.Thread(target=self._hear_queue, name="robot-hearing", daemon=True)
+                self._hearing.start()
+                self.microphone = Microphone(
+                    device,
+                    self._on_utterance,
+                    self._input_stream,
+                    on_speech=self._spot_speech,
+                    on_discard=self._spot_discard,
+                )
                 self.microphone.start()
             except Exception as exc:  # no recogniser (ASRError), or PortAudio cannot open the device
                 self.microphone = None
                 device = AudioDevice("input", None, "", 0, f"{device.name} cannot be used: {exc}")
         self.microphone_status = device.describe()
         if device.available:
-            message = f"{self.microphone_status}: listening ({self.config.engine})"
-            self._publish("speech/microphone", message, Level.OK, available=True, device=device.name)
+            stop = "; a spoken stop latches the e-stop" if self.spoken_stop else ""
+            engine = getattr(self._recognizer, "name", self.config.engine)
+            message = f"{self.microphone_status}: listening ({engine}){stop}"
+            self._publish(
+                "speech/microphone", message, Level.OK, available=True, device=device.name, spoken_stop=self.spoken_stop
+            )
         else:
             quiet = self.config.microphone.strip().lower() == "off"
-            self._publish("speech/microphone", f"{self.microphone_status}; voice commands work through the page",
-                          Level.OK if quiet else Level.WARN, available=False, reason=device.problem)  # fmt: skip
+            self._publish(
+                "speech/microphone",
+                f"{self.microphone_status}; voice commands work through the page",
+                Level.OK if quiet else Level.WARN,
+                available=False,
+                reason=device.problem,
+            )
 
     def _start_speaker(self, device: AudioDevice) -> None:
         if device.available:
@@ -134,16 +179,78 @@ class RobotVoice:
             self._say_thread.start()
         self.speaker_status = device.describe()
         if device.available:
-            self._publish("speech/speaker", f"{self.speaker_status}: the robot speaks aloud", Level.OK,
-                          available=True, device=device.name)  # fmt: skip
+            self._publish(
+                "speech/speaker",
+                f"{self.speaker_status}: the robot speaks aloud",
+                Level.OK,
+                available=True,
+                device=device.name,
+            )
         else:
             quiet = self.config.speaker.strip().lower() == "off"
-            self._publish("speech/speaker", f"{self.speaker_status}; the page speaks for the robot",
-                          Level.OK if quiet else Level.WARN, available=False, reason=device.problem)  # fmt: skip
+            self._publish(
+                "speech/speaker",
+                f"{self.speaker_status}; the page speaks for the robot",
+                Level.OK if quiet else Level.WARN,
+                available=False,
+                reason=device.problem,
+            )
 
     # hearing
 
+    def _spot_speech(self, samples) -> None:
+        """Microphone thread: a piece of speech, for the spotter to decode while the words come."""
+        if self._spotter is not None:
+            try:
+                self._spotter.feed(samples)
+            except ASRError as exc:
+                self._restart_spotter(str(exc))
+
+    def _spot_discard(self) -> None:
+        if self._spotter is not None:
+            try:
+                self._spotter.finish(VERDICT_TIMEOUT_S)
+            except ASRError as exc:
+                self._restart_spotter(str(exc))
+
     def _on_utterance(self, audio: Audio) -> None:
+        """Microphone thread: the utterance has ended. A stop latches now; recognition goes to its own thread."""
+        verdict = None
+        if self._spotter is not None:
+            try:
+                verdict = self._spotter.finish(VERDICT_TIMEOUT_S)
+            except ASRError as exc:
+                self._restart_spotter(str(exc))
+        spotted = verdict is not None and verdict.stop
+        if spotted:
+            self._latch(verdict.heard or " ".join(s.phrase for s in verdict.spotted), "spotter", verdict)
+        try:
+            self._heard.put_nowait((audio, spotted))
+        except queue.Full:
+            log.warning("the recogniser is 20 utterances behind: one is dropped")
+
+    def _latch(self, heard: str, stage: str, verdict: StopVerdict | None = None) -> None:
+        assert self._estop is not None
+        reply = self._estop()
+        self._publish(
+            "speech/stop",
+            f'the robot heard "{heard}": e-stop latched ({reply.message})',
+            Level.WARN,
+            heard=heard,
+            stage=stage,
+            source=SOURCE,
+            accepted=reply.accepted,
+            verdict=verdict.as_dict() if verdict else None,
+        )
+
+    def _hear_queue(self) -> None:
+        while (item := self._heard.get()) is not None:
+            try:
+                self._hear(*item)
+            except Exception:  # one bad utterance must not deafen the robot
+                log.exception("handling an utterance failed")
+
+    def _hear(self, audio: Audio, spotted_stop: bool) -> None:
         if self._recognizer is None:
             return
         try:
@@ -153,38 +260,84 @@ class RobotVoice:
             return
         if not transcript.text:
             return  # a noise, a cough: nothing to show or keep
-        sure = transcript.in_grammar and transcript.confidence >= AUTO_RUN_CONFIDENCE
-        will_run = sure and self.config.auto_run
-        heard = {
+        late_stop = self.spoken_stop and not spotted_stop and is_stop_utterance(transcript.text)
+        stop = spotted_stop or late_stop
+        will_run = transcript.sure and self.config.auto_run and not stop
+        heard = {**self._heard_data(transcript, audio, will_run), "stop": stop}
+        how = "a spoken stop" if stop else "running it" if will_run else "confirm it in the page"
+        self._publish(
+            "speech/heard",
+            f'the robot heard "{transcript.text}" (confidence {transcript.confidence:.2f}): {how}',
+            Level.OK,
+            **heard,
+        )
+        if late_stop:
+            self._latch(transcript.text, "transcript")
+        elif will_run:
+            reply = self._run_command(transcript.text)
+            self._publish(
+                "speech/command",
+                reply.message,
+                Level.OK if reply.accepted else Level.WARN,
+                text=transcript.text,
+                source=SOURCE,
+                accepted=reply.accepted,
+                command_id=reply.command_id,
+                refusal=reply.refusal.value if reply.refusal else None,
+                reply=reply.message,
+                errors=list(reply.errors),
+            )
+
+    def _heard_data(self, transcript: Transcript, audio: Audio, will_run: bool) -> dict[str, Any]:
+        return {
             "text": transcript.text,
             "confidence": round(transcript.confidence, 3),
             "in_grammar": transcript.in_grammar,
             "engine": transcript.engine,
             "audio_s": round(transcript.audio_s, 3),
             "decode_ms": round(transcript.decode_s * 1000, 1),
-            "auto_run": sure,
+            "auto_run": transcript.sure,
             "will_run": will_run,
             "source": SOURCE,
             "audio_path": self._spool_utterance(audio),
         }
-        how = "running it" if will_run else "confirm it in the page"
-        self._publish("speech/heard", f'the robot heard "{transcript.text}" '
-                      f"(confidence {transcript.confidence:.2f}): {how}", Level.OK, **heard)  # fmt: skip
-        if will_run:
-            reply = self._run_command(transcript.text)
-            self._publish("speech/command", reply.message, Level.OK if reply.accepted else Level.WARN,
-                          text=transcript.text, source=SOURCE, accepted=reply.accepted, command_id=reply.command_id,
-                          refusal=reply.refusal.value if reply.refusal else None, reply=reply.message,
-                          errors=list(reply.errors))  # fmt: skip
+
+    def _restart_spotter(self, problem: str) -> None:
+        self._publish(
+            "speech/microphone",
+            f"the stop spotter failed ({problem}): restarting it",
+            Level.WARN,
+            available=True,
+            problem=problem,
+        )
+        if self._spotter is not None:
+            self._spotter.close()
+        try:
+            self._spotter = RecognizerProcess("", self._objects, self._places, spotter=True)
+        except Exception as exc:
+            self._spotter = None
+            self._publish(
+                "speech/microphone",
+                f"no spoken stop: the spotter cannot restart ({exc})",
+                Level.ERROR,
+                available=True,
+                reason=str(exc),
+            )
 
     def _restart_recognizer(self, problem: str) -> None:
-        self._publish("speech/microphone", f"the recogniser failed ({problem}): an utterance was lost; restarting it",
-                      Level.WARN, available=True, problem=problem)  # fmt: skip
+        self._publish(
+            "speech/microphone",
+            f"the recogniser failed ({problem}): an utterance was lost; restarting it",
+            Level.WARN,
+            available=True,
+            problem=problem,
+        )
         if hasattr(self._recognizer, "close"):
             self._recognizer.close()
         try:
-            self._recognizer = self._recognizer_factory(self.config.engine, self._objects, self._places,
-                                                        self.config.whisper_model_dir)  # fmt: skip
+            self._recognizer = self._recognizer_factory(
+                self.config.engine, self._objects, self._places, self.config.whisper_model_dir
+            )
         except Exception as exc:
             self.microphone_status = f"no robot microphone: the recogniser cannot restart ({exc})"
             self._publish("speech/microphone", self.microphone_status, Level.ERROR, available=False, reason=str(exc))

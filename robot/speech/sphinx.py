@@ -27,7 +27,6 @@ from robot.speech.audio import Audio
 from robot.speech.denoise import denoise, snr_db
 from robot.speech.grammar import Grammar, build_grammar
 
-AUTO_RUN_CONFIDENCE = 0.7  # at or above: a command may run without the operator confirming it (a setting)
 RATIO_AT_FULL = -0.08  # log-likelihood ratio per second that maps to confidence 1
 RATIO_SPAN = 0.25  # ... and this much below it, to 0
 FREE_SPEECH_SCALE = 0.5
@@ -42,8 +41,9 @@ NOISY_BELOW_SNR_DB = 25.0
 class PocketSphinxASR:
     name = "pocketsphinx"
 
-    def __init__(self, objects: dict[str, tuple[str, ...]], places: dict[str, tuple[str, ...]],
-                 free_speech: bool = True) -> None:  # fmt: skip
+    def __init__(
+        self, objects: dict[str, tuple[str, ...]], places: dict[str, tuple[str, ...]], free_speech: bool = True
+    ) -> None:
         try:
             import pocketsphinx
         except ImportError as exc:
@@ -64,6 +64,14 @@ class PocketSphinxASR:
         self._free = pocketsphinx.Decoder(**options) if free_speech else None
         self._phones = pocketsphinx.Decoder(allphone=str(model / "en-us-phone.lm.bin"), lw=2.0, **options)
         self._lock = threading.Lock()  # a decoder decodes one utterance at a time
+
+    def command_sentence(self, audio: Audio) -> str:
+        """The grammar's sentence for the utterance alone ("" when it finds none): no confidence, no free speech."""
+        pcm = Audio(_dither(denoise(audio.samples))).pcm()
+        noisy = snr_db(audio.samples) < NOISY_BELOW_SNR_DB
+        with self._lock:
+            text, _, _ = _decode(self._commands, pcm, passes=2 if noisy else 1)
+        return text if text and self.grammar.accepts(text) else ""
 
     def transcribe(self, audio: Audio) -> Transcript:
         started = time.perf_counter()

@@ -9,7 +9,7 @@ decision window (0.3 s is pocketsphinx's default) takes 90 ms off the time from 
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 import numpy as np
 
@@ -20,15 +20,28 @@ MIN_UTTERANCE_S = 0.3  # shorter bursts (a knock, a click) are no command
 
 
 class UtteranceDetector:
-    """Feed 16 kHz int16 samples in blocks of any size; get back each utterance once its end is heard."""
+    """Feed 16 kHz int16 samples in blocks of any size; get back each utterance once its end is heard.
 
-    def __init__(self, aggressiveness: int = 3, window_s: float = 0.2, ratio: float = 0.9) -> None:
+    `on_speech` gets each piece of an utterance as soon as it is known to be speech (the spoken stop's spotter
+    decodes while the words come), and `on_discard` is told when the pieces so far are thrown away (too short to be
+    a command, or forgotten by `reset`)."""
+
+    def __init__(
+        self,
+        aggressiveness: int = 3,
+        window_s: float = 0.2,
+        ratio: float = 0.9,
+        on_speech: Callable[[np.ndarray], None] | None = None,
+        on_discard: Callable[[], None] | None = None,
+    ) -> None:
         from pocketsphinx import Endpointer
 
         self._endpointer = Endpointer(window=window_s, ratio=ratio, vad_mode=aggressiveness, sample_rate=RATE)
         self._frame = self._endpointer.frame_bytes // 2
         self._pending = np.zeros(0, np.int16)
         self._speech: list[bytes] = []
+        self._on_speech = on_speech
+        self._on_discard = on_discard
 
     @property
     def in_speech(self) -> bool:
@@ -44,6 +57,8 @@ class UtteranceDetector:
             speech = self._endpointer.process(data[start : start + self._frame].tobytes())
             if speech is not None:
                 self._speech.append(speech)
+                if self._on_speech is not None:
+                    self._on_speech(np.frombuffer(speech, dtype="<i2").astype(np.int16))
             ended = was_speaking and not self._endpointer.in_speech
             too_long = sum(map(len, self._speech)) >= MAX_UTTERANCE_S * RATE * 2
             if (ended or too_long) and (utterance := self._take()):
@@ -51,6 +66,8 @@ class UtteranceDetector:
 
     def reset(self) -> None:
         """Forget what was heard so far (the robot's own voice, while it speaks)."""
+        if self._speech and self._on_discard is not None:
+            self._on_discard()
         self._speech.clear()
         self._pending = np.zeros(0, np.int16)
         for _ in range(200):  # close an open utterance without keeping it (silence ends one within the window)
@@ -61,4 +78,8 @@ class UtteranceDetector:
     def _take(self) -> Audio | None:
         pcm, self._speech = b"".join(self._speech), []
         samples = np.frombuffer(pcm, dtype="<i2").astype(np.int16)
-        return Audio(samples) if len(samples) >= MIN_UTTERANCE_S * RATE else None
+        if len(samples) >= MIN_UTTERANCE_S * RATE:
+            return Audio(samples)
+        if len(samples) and self._on_discard is not None:
+            self._on_discard()
+        return None

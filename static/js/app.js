@@ -13,6 +13,9 @@ async function loadConfig() {
   $("planner").textContent = "planner: " + humanoid.config.planner;
   const robotAudio = [humanoid.config.microphone, humanoid.config.speaker].filter(Boolean);
   $("robot-audio").textContent = robotAudio.join(" · ");
+  $("spoken-stop").textContent = humanoid.config.spoken_stop
+    ? "spoken stop on: say \u201cstop\u201d, \u201chalt\u201d or \u201cfreeze\u201d to latch the e-stop"
+    : "spoken stop off";
   $("approve-toggle").checked = humanoid.config.approval_required;
   const software = softwareWebGL();
   // Browsers without a GPU get the light view: the full one keeps a CPU renderer busy ~200 ms a frame.

@@ -25,6 +25,7 @@
 
   // The robot's own microphone: what it heard, run already when it was sure, else offered for confirmation.
   window.humanoid.onRobotHeard = (data) => {
+    if (data.stop) return heard(`the robot heard a spoken stop ("${data.text}"): e-stop latched`, true);
     const sure = `confidence ${data.confidence.toFixed(2)}${data.in_grammar ? "" : ", not a known command form"}`;
     if (data.will_run) return heard(`the robot heard "${data.text}" (${sure}): running`, false);
     $("command-text").value = data.text;
@@ -82,6 +83,7 @@
     const data = await r.json().catch(() => ({ detail: { message: r.statusText } }));
     if (!r.ok) return heard((data.detail && data.detail.message) || JSON.stringify(data.detail), true);
     window.humanoid.lastTranscript = data;
+    if (data.stop_word) return heard(`heard a spoken stop${data.text ? ` ("${data.text}")` : ""}: e-stop latched`, true);
     if (!data.text) return heard("nothing recognised: try again, closer to the microphone", true);
     $("command-text").value = data.text;
     const sure = `confidence ${data.confidence.toFixed(2)}${data.in_grammar ? "" : ", not a known command form"}`;

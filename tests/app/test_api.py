@@ -287,6 +287,72 @@ def test_speech_is_transcribed_from_wav_or_raw_pcm_and_bad_audio_is_refused(clie
     assert client.get(kept[1]["audio_url"].replace(f"/{kept[1]['id']}/", "/999/")).status_code == 404
 
 
+def _latched(client) -> bool:
+    return client.get("/api/state").json()["estop_latched"]
+
+
+def _wait_released(client, timeout_s: float = 10.0) -> bool:
+    """The released state reaches the state board with the control loop's next tick."""
+    deadline = time.monotonic() + timeout_s
+    while _latched(client) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    return not _latched(client)
+
+
+def test_a_spoken_stop_from_the_page_latches_the_estop_and_stop_inside_a_command_does_not(client) -> None:
+    from robot.speech.tts import synthesize
+
+    assert client.get("/api/config").json()["spoken_stop"] is True
+    command = synthesize("go to the dock and stop there", "en-gb", 170)
+    heard = client.post("/api/speech/transcribe", content=command, headers={"Content-Type": "audio/wav"}).json()
+    assert heard["stop_word"] is False and heard["estop"] is None and not _latched(client), heard
+    for phrase, voice in (("stop", "en-us"), ("halt right now", "en-gb"), ("emergency stop", "en-us+f2")):
+        wav = synthesize(phrase, voice, 150)
+        heard = client.post("/api/speech/transcribe", content=wav, headers={"Content-Type": "audio/wav"}).json()
+        assert heard["stop_word"] is True and heard["auto_run"] is False, (phrase, heard)
+        assert _latched(client)  # latched before the answer came back, as the button would
+        events = [e for e in client.get("/api/events").json() if e["kind"] == "estop/latched"]
+        assert events and events[-1]["data"]["source"] == "voice"
+        assert client.post("/api/estop/reset").status_code == 200  # release stays the explicit release
+        assert _wait_released(client)
+
+
+def test_the_spoken_stop_can_be_turned_off(client, monkeypatch) -> None:
+    from robot.speech.tts import synthesize
+
+    monkeypatch.setattr(client.runtime, "settings", client.runtime.settings.model_copy(update={"spoken_stop": False}))
+    assert client.get("/api/config").json()["spoken_stop"] is False
+    heard = client.post("/api/speech/transcribe", content=synthesize("stop", "en-us", 150)).json()
+    assert heard["text"].startswith("stop") and heard["stop_word"] is False and not _latched(client)
+
+
+@pytest.fixture
+def whisper_client(settings, make_worker):
+    from fastapi.testclient import TestClient
+
+    from app.main import create_app
+    from app.runtime import Runtime
+
+    settings = settings.model_copy(update={"asr_engine": "auto"})
+    runtime = Runtime.start(settings, worker=make_worker(realtime=True))
+    with TestClient(create_app(settings, runtime=runtime)) as test_client:
+        test_client.runtime = runtime  # type: ignore[attr-defined]
+        yield test_client
+    runtime.stop()
+
+
+def test_the_page_hears_everyday_wording_with_whisper_when_it_is_installed(whisper_client) -> None:
+    from robot.speech.tts import synthesize
+
+    wav = synthesize("could you please bring me the red mug", "en-us", 160)
+    heard = whisper_client.post("/api/speech/transcribe", content=wav, headers={"Content-Type": "audio/wav"}).json()
+    assert heard["engine"] == "whisper" and "bring me the red mug" in heard["text"].lower(), heard
+    assert heard["stop_word"] is False and 0.0 < heard["confidence"] <= 1.0
+    halt = synthesize("halt please", "en-gb", 160)
+    heard = whisper_client.post("/api/speech/transcribe", content=halt, headers={"Content-Type": "audio/wav"}).json()
+    assert heard["stop_word"] is True and _latched(whisper_client), heard
+
+
 def test_the_robots_sentences_are_served_as_speech(client) -> None:
     spoken = client.get("/api/speech/say.wav", params={"text": "I have picked up the red mug."})
     assert spoken.status_code == 200 and spoken.headers["content-type"] == "audio/wav"

@@ -14,14 +14,16 @@ RESULT_KEYS = {"success", "transcript", "plan", "steps", "sim_time_s", "wall_tim
                "session_id"}  # fmt: skip
 
 
-def humanoid(tmp_path, *args: str, timeout_s: float = 120.0) -> subprocess.CompletedProcess:
+def humanoid(tmp_path, *args: str, timeout_s: float = 120.0, env: dict[str, str] | None = None):
     env = {
         **os.environ,
         "DATABASE_URL": f"sqlite:///{tmp_path / 'cli.db'}",
         "HUMANOID_AUDIO_DIR": str(tmp_path / "audio"),
+        **(env or {}),
     }
-    return subprocess.run([sys.executable, "-m", "app.cli", *args], capture_output=True, text=True, env=env,
-                          timeout=timeout_s)  # fmt: skip
+    return subprocess.run(
+        [sys.executable, "-m", "app.cli", *args], capture_output=True, text=True, env=env, timeout=timeout_s
+    )
 
 
 def test_run_prints_the_result_and_records_a_session(tmp_path) -> None:
@@ -157,13 +159,13 @@ def test_transcribe_prints_text_and_confidence_and_run_takes_a_spoken_command(tm
 
     wav = tmp_path / "command.wav"
     wav.write_bytes(synthesize("wait for three seconds", "en-us", 160))
-    done = humanoid(tmp_path, "transcribe", str(wav), "--json")
+    done = humanoid(tmp_path, "transcribe", str(wav), "--json", "--engine", "pocketsphinx")
     assert done.returncode == 0, done.stderr
     heard = json.loads(done.stdout)
     assert heard["text"] == "wait for three seconds" and 0.0 < heard["confidence"] <= 1.0
-    assert heard["engine"] == "pocketsphinx" and heard["in_grammar"] is True
+    assert heard["engine"] == "pocketsphinx" and heard["in_grammar"] is True and heard["stop_word"] is False
 
-    run = humanoid(tmp_path, "run", "--audio", str(wav), "--json")
+    run = humanoid(tmp_path, "run", "--audio", str(wav), "--json", env={"HUMANOID_ASR_ENGINE": "pocketsphinx"})
     assert run.returncode == 0, run.stderr
     result = json.loads(run.stdout)
     assert result["success"] and result["transcript"] == "wait for three seconds"
@@ -175,6 +177,21 @@ def test_transcribe_prints_text_and_confidence_and_run_takes_a_spoken_command(tm
 
     missing = humanoid(tmp_path, "transcribe", str(tmp_path / "nope.wav"))
     assert missing.returncode == 2 and "no such audio file" in missing.stderr
+
+
+def test_transcribe_hears_everyday_wording_with_whisper_by_default_and_reports_a_spoken_stop(tmp_path) -> None:
+    from robot.speech.tts import synthesize
+
+    command, stop = tmp_path / "command.wav", tmp_path / "stop.wav"
+    command.write_bytes(synthesize("walk to the kitchen counter and stop there", "en-gb", 170))
+    stop.write_bytes(synthesize("stop right now", "en-us", 150))
+    heard = json.loads(humanoid(tmp_path, "transcribe", str(command), "--json").stdout)
+    assert heard["engine"] == "whisper"  # the test set-up installs the whisper extra: it is the default
+    assert "stop there" in heard["text"].lower() and heard["stop_word"] is False, heard
+    halted = json.loads(humanoid(tmp_path, "transcribe", str(stop), "--json").stdout)
+    assert halted["stop_word"] is True, halted
+    grammar = json.loads(humanoid(tmp_path, "transcribe", str(stop), "--json", "--engine", "pocketsphinx").stdout)
+    assert grammar["stop_word"] is True and grammar["engine"] == "pocketsphinx", grammar
 
 
 def test_sessions_are_listed_shown_exported_imported_and_deleted_from_the_command_line(tmp_path) -> None:

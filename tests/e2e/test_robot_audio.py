@@ -107,7 +107,13 @@ def test_the_robot_hears_a_command_with_its_microphone_and_answers_aloud(tmp_pat
     home.mkdir()
     os.mkfifo(pipe)
     (home / ".asoundrc").write_text(ASOUNDRC.format(microphone=pipe, speaker=spoken))
-    env = {"HOME": str(home), "HUMANOID_MICROPHONE": "robotmic", "HUMANOID_SPEAKER": "robotspeaker"}
+    # the grammar recogniser: the transcript is then the command's own words (whisper's are tested elsewhere)
+    env = {
+        "HOME": str(home),
+        "HUMANOID_MICROPHONE": "robotmic",
+        "HUMANOID_SPEAKER": "robotspeaker",
+        "HUMANOID_ASR_ENGINE": "pocketsphinx",
+    }
     sync_api = pytest.importorskip("playwright.sync_api")
     with (
         RoomMicrophone(pipe) as room,
@@ -123,6 +129,7 @@ def test_the_robot_hears_a_command_with_its_microphone_and_answers_aloud(tmp_pat
         sync_api.expect(page.locator("#robot-audio")).to_have_text(
             "robot microphone: robotmic (16000 Hz) · robot speaker: robotspeaker (16000 Hz)"
         )
+        sync_api.expect(page.locator("#spoken-stop")).to_contain_text("spoken stop on")
         sync_api.expect(page.locator("#conn")).to_contain_text("connected", timeout=20_000)
         room.say(synthesize_audio("go back to where you started", "en-us", 150).samples)
         # the operator sees what the robot heard, and that it is running it
@@ -157,3 +164,13 @@ def test_the_robot_hears_a_command_with_its_microphone_and_answers_aloud(tmp_pat
         assert audio.status_code == 200 and audio.content.startswith(b"RIFF")
         commands = [(c["source"], c["text"], c["accepted"]) for c in session["commands"]]
         assert commands == [("robot-mic", "go back to where you started", True)]
+
+        # a spoken stop: the robot's own code latches its e-stop, as the button does; release stays explicit
+        assert not server.get("/api/state")["estop_latched"]
+        room.say(synthesize_audio("stop", "en-gb", 160).samples)
+        deadline, latched = time.monotonic() + 30, []
+        while time.monotonic() < deadline and not latched:
+            latched = [e for e in server.get("/api/events") if e["kind"] == "estop/latched"]
+            time.sleep(0.2)
+        assert latched and latched[0]["data"]["source"] == "voice", [e["message"] for e in server.get("/api/events")]
+        assert server.get("/api/state")["estop_latched"]

@@ -12,10 +12,11 @@ import pytest
 
 from app.bench.voice import run_trials, spoken_cases, summarise, word_errors
 from robot.planning.world_context import WorldContext
+from robot.speech.asr import AUTO_RUN_CONFIDENCE
 from robot.speech.audio import RATE, Audio, AudioError, add_noise, from_samples, read_wav_bytes
 from robot.speech.denoise import denoise
 from robot.speech.grammar import build_grammar
-from robot.speech.sphinx import AUTO_RUN_CONFIDENCE, PocketSphinxASR
+from robot.speech.sphinx import PocketSphinxASR
 from robot.speech.tts import TTSError, synthesize, synthesize_audio
 
 
@@ -82,6 +83,7 @@ def test_the_grammar_names_the_worlds_things_and_accepts_only_whole_commands(wor
     assert grammar.accepts("pick up the red mug from the kitchen counter")
     assert grammar.accepts("please bring the apple to the living room table")
     assert grammar.accepts("wait for five seconds")
+    assert grammar.accepts("stop right now") and grammar.accepts("emergency stop")
     assert not grammar.accepts("go to the charging")  # the partial path a lost decoder returns
     assert not grammar.accepts("what is the weather like today")
 
@@ -152,13 +154,106 @@ def test_synthesis_makes_a_wav_and_refuses_what_it_cannot_say() -> None:
         synthesize("word " * 200)
 
 
-def test_whisper_without_a_model_directory_says_what_to_set(tmp_path, world) -> None:
+def test_whisper_without_a_model_says_what_to_set(tmp_path, world) -> None:
     from robot.speech.asr import ASRError
     from robot.speech.engines import build_recognizer
 
-    with pytest.raises(ASRError, match="HUMANOID_WHISPER_MODEL_DIR"):
-        build_recognizer("whisper", world.objects, world.places, "")
     with pytest.raises(ASRError, match=r"model\.bin"):
         build_recognizer("whisper", world.objects, world.places, str(tmp_path))  # a directory without a model
     with pytest.raises(ASRError, match="unknown speech engine 'vosk'"):
         build_recognizer("vosk", world.objects, world.places)
+
+
+@pytest.fixture(scope="module")
+def whisper(world):
+    from robot.speech.whisper import WhisperASR, packaged_model_dir
+
+    assert packaged_model_dir() is not None, "the test set-up installs the whisper extra with its packaged model"
+    return WhisperASR("", world.objects, world.places)
+
+
+def test_whisper_is_the_default_and_hears_everyday_wording_the_same_way_every_time(whisper) -> None:
+    from robot.speech.engines import resolve_engine
+
+    assert resolve_engine("auto") == "whisper" and resolve_engine("pocketsphinx") == "pocketsphinx"
+    said = synthesize_audio("um, could you please bring me the water bottle", "en-gb", 170)
+    audio = add_noise(said, 10.0, seed=4, colour="brown")
+    first, second = whisper.transcribe(audio), whisper.transcribe(audio)
+    assert first.text == second.text and first.confidence == second.confidence  # temperature 0: no sampling
+    assert "bring me the water bottle" in first.text.lower(), first  # the world's names as hints
+    assert first.engine == "whisper" and 0.0 < first.confidence <= 1.0
+
+
+def test_whisper_is_surer_of_what_it_heard_right_than_of_what_it_did_not(whisper) -> None:
+    clean = whisper.transcribe(synthesize_audio("go to the charging dock", "en-us", 160))
+    assert clean.text.lower().rstrip(".") == "go to the charging dock" and clean.sure, clean
+    mumble = whisper.transcribe(add_noise(synthesize_audio("grab the apple", "en-us+f2", 230), 0.0, 2, "brown"))
+    assert mumble.confidence < clean.confidence, (mumble, clean)
+    assert whisper.transcribe(Audio(np.zeros(RATE, np.int16))).sure is False  # silence runs nothing
+
+
+@pytest.fixture(scope="module")
+def spotter(world):
+    from robot.speech.stop_word import StopSpotter
+
+    return StopSpotter(world.objects, world.places)
+
+
+def _padded(text: str, voice: str, wpm: int, snr_db: float | None = None) -> Audio:
+    """As a push-to-talk recording: a little quiet before and after the words, a quiet room or brown noise."""
+    words = synthesize_audio(text, voice, wpm).samples
+    padded = Audio(np.concatenate([np.zeros(6400, np.int16), words, np.zeros(4800, np.int16)]))
+    return add_noise(padded, 40.0, seed=7) if snr_db is None else add_noise(padded, snr_db, seed=7, colour="brown")
+
+
+@pytest.mark.parametrize(
+    ("text", "voice", "wpm", "snr_db"),
+    [
+        ("stop", "en-us", 160, None),
+        ("halt", "en-gb", 175, None),
+        ("freeze", "en-us", 150, 10.0),
+        ("stop right now", "en-gb", 160, None),
+        ("emergency stop", "en-us", 150, 10.0),
+    ],
+)
+def test_a_stop_phrase_alone_or_with_a_few_words_is_a_spoken_stop(spotter, text, voice, wpm, snr_db) -> None:
+    verdict = spotter.spot(_padded(text, voice, wpm, snr_db))
+    assert verdict.stop and verdict.spotted, verdict
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "go to the dock and stop there",
+        "don't stop until you reach the table",
+        "please bring me the red mug",
+        "head home please",
+        "walk over to the kitchen counter",
+    ],
+)
+def test_stop_inside_a_command_and_words_that_sound_like_it_are_no_spoken_stop(spotter, text) -> None:
+    for voice, wpm, snr_db in (("en-us", 160, None), ("en-gb", 170, 10.0)):
+        assert not spotter.spot(_padded(text, voice, wpm, snr_db)).stop, (text, voice)
+
+
+def test_the_spotter_gives_the_same_verdict_however_the_audio_is_cut_into_blocks(spotter) -> None:
+    audio = _padded("stop now", "en-us", 150)
+    verdicts = []
+    for block in (480, 1600, len(audio.samples)):
+        for start in range(0, len(audio.samples), block):
+            spotter.feed(audio.samples[start : start + block])
+        verdicts.append(spotter.finish())
+    assert [(v.stop, v.spotted, v.heard) for v in verdicts[1:]] == [
+        (v.stop, v.spotted, v.heard) for v in verdicts[:1]
+    ] * 2
+    assert "stop" in [s.phrase for s in verdicts[0].spotted]
+    assert not spotter.finish().stop  # nothing fed: no stop
+
+
+def test_a_transcript_is_a_stop_when_its_words_are_a_stop_phrase_with_a_few_more() -> None:
+    from robot.speech.stop_word import is_stop_utterance
+
+    for text in ("Stop!", "stop right now please", "Robot, stop.", "Emergency stop now", "hey robot halt", "Freeze."):
+        assert is_stop_utterance(text), text
+    for text in ("go to the dock and stop there", "stop by the kitchen and get the mug", "top", "bus stop", ""):
+        assert not is_stop_utterance(text), text

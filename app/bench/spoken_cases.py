@@ -1,0 +1,202 @@
+"""Spoken test sets for `humanoid bench speech` and the tests: what people say to the robot, in everyday wording,
+with the plan each must give; stop phrases, alone and with a few words around them; and ordinary commands that
+contain "stop" (which must not stop the robot).
+
+Two sets, each with its own voices and speeds: `DEV`, the one the recognisers' hints, the confidence and the
+stop spotter's thresholds are tuned on, and `HELDOUT`, written before any tuning (other voices, speeds and
+phrasings) and only ever measured. Do not change a held-out case to make a figure pass; a wrong label may be
+fixed, saying why in the commit.
+
+Every case is asked in the default world (seed 0). Plans are labelled as in `planner_cases`; a sentence of
+several steps as `seq` says (the steps' plans in order; a step's closing confirmation is left out when another
+step follows; a step the same as the one just before it is left out).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from app.bench.planner_cases import (
+    APPLE,
+    BOTTLE,
+    COUNTER,
+    DOCK,
+    HOME,
+    LOOK_AND_TELL,
+    MUG,
+    STOP,
+    TABLE,
+    Case,
+    Seed,
+    carry,
+    fetch,
+    find,
+    go,
+)
+
+_CONFIRMATION = {"action": "say", "text": "*"}
+
+
+def seq(*parts: Seed) -> Seed:
+    """Steps done one after the other, labelled as the module's docstring says."""
+    steps: list[dict[str, str]] = []
+    for i, part in enumerate(parts):
+        last = i == len(parts) - 1
+        part = part if last or not part or part[-1] != _CONFIRMATION else part[:-1]
+        for step in part:
+            if not steps or steps[-1] != step:
+                steps.append(step)
+    return steps
+
+
+def say(text: str) -> Seed:
+    return [{"action": "say", "text": text}]
+
+
+def wait(seconds: str) -> Seed:
+    return [{"action": "wait", "seconds": seconds}]
+
+
+@dataclass(frozen=True)
+class Voice:
+    """An espeak-ng voice (with a variant after "+"), its speed in words per minute and its pitch (0-99)."""
+
+    name: str
+    wpm: int
+    pitch: int = 50
+
+    def label(self) -> str:
+        return f"{self.name}@{self.wpm}"
+
+
+@dataclass(frozen=True)
+class SpokenSet:
+    name: str
+    voices: tuple[Voice, ...]
+    commands: tuple[Case, ...]  # everyday wording, each with its plan
+    stops: tuple[str, ...]  # an utterance that is a stop phrase, alone or with a few words: latches the e-stop
+    with_stop: tuple[Case, ...]  # ordinary commands containing a stop word: no e-stop; plan as labelled
+
+
+DEV = SpokenSet(
+    name="dev",
+    voices=(Voice("en-us", 160), Voice("en-gb", 175), Voice("en-us+f2", 140, 60), Voice("en-gb-x-rp", 150, 40)),
+    commands=(
+        # politeness and fillers
+        Case("could you please bring me the red mug", fetch(MUG)),
+        Case("hey robot, grab the apple for me", fetch(APPLE)),
+        Case("um, go to the charging dock please", go(DOCK)),
+        Case("would you mind picking up the water bottle", fetch(BOTTLE)),
+        Case("okay robot, walk over to the kitchen counter", go(COUNTER)),
+        Case("I would like the green apple please", fetch(APPLE)),
+        Case("can you please find the mug for me", find(MUG)),
+        Case("so, uh, what do you see right now", LOOK_AND_TELL),
+        # everyday words for the things and places
+        Case("fetch the coffee cup", fetch(MUG)),
+        Case("go to the charger", go(DOCK)),
+        Case("put the bottle on the coffee table", carry(BOTTLE, TABLE)),
+        Case("head to the kitchen", go(COUNTER)),
+        Case("bring the fruit to the table", carry(APPLE, TABLE)),
+        Case("where did the water bottle go", find(BOTTLE)),
+        # sequences
+        Case("pick up the apple and then bring it to the table", carry(APPLE, TABLE)),
+        Case("go to the dock and then come back home", seq(go(DOCK), HOME)),
+        Case("first find the bottle, then pick it up", seq(find(BOTTLE), fetch(BOTTLE))),
+        Case("walk to the table and tell me what you see", seq(go(TABLE), LOOK_AND_TELL)),
+        # pronouns: what the robot holds, what was just talked about
+        Case("put it on the table", carry(MUG, TABLE, held=True), held=MUG),
+        Case("now bring it to me", fetch(APPLE), history=(("find the apple", find(APPLE)),)),
+        # the object first
+        Case("the red mug, bring it to the table", carry(MUG, TABLE)),
+        # announcements, waiting, home
+        Case("say good morning everyone", say("good morning everyone")),
+        Case("wait for five seconds", wait("5")),
+        Case("go back to where you started", HOME),
+        Case("head home please", HOME),
+        Case("take the mug to the living room", carry(MUG, TABLE)),
+        Case("could you carry the apple to the charging dock", carry(APPLE, DOCK)),
+        Case("look for the green apple", find(APPLE)),
+    ),
+    stops=(
+        "stop",
+        "halt",
+        "freeze",
+        "robot stop",
+        "emergency stop",
+        "stop now",
+        "stop right now",
+        "please stop",
+        "halt please",
+        "freeze right now",
+        "robot, stop please",
+        "emergency stop now",
+    ),
+    with_stop=(
+        Case("go to the dock and stop there", go(DOCK)),
+        Case("stop by the kitchen and get the mug", fetch(MUG)),
+        Case("don't stop until you reach the table", go(TABLE)),
+        Case("walk to the table without stopping", go(TABLE)),
+    ),
+)
+
+HELDOUT = SpokenSet(
+    name="heldout",
+    voices=(
+        Voice("en-gb-scotland+m3", 150, 45),
+        Voice("en-029", 165),
+        Voice("en-us-nyc+f4", 185, 55),
+        Voice("en-gb-x-gbclan+m6", 130),
+    ),
+    commands=(
+        Case("would you be so kind as to fetch the bottle", fetch(BOTTLE)),
+        Case("robot, please take the mug to the living room table", carry(MUG, TABLE)),
+        Case("er, could you head over to the charging station", go(DOCK)),
+        Case("I need the apple, thanks", fetch(APPLE)),
+        Case("please grab me the water bottle", fetch(BOTTLE)),
+        Case("what can you see from where you are", LOOK_AND_TELL),
+        Case("could you carry the apple over to the dock", carry(APPLE, DOCK)),
+        Case("take the cup and put it on the counter", carry(MUG, COUNTER)),
+        Case("walk to the kitchen, then go to the dock", seq(go(COUNTER), go(DOCK))),
+        Case("grab the bottle and bring it to me", fetch(BOTTLE)),
+        Case("set it down on the coffee table", carry(APPLE, TABLE, held=True), held=APPLE),
+        Case("okay, pick that up", fetch(BOTTLE), history=(("where is the bottle", find(BOTTLE)),)),
+        Case("the green apple, could you bring it to the table", carry(APPLE, TABLE)),
+        Case("say welcome home", say("welcome home")),
+        Case("pause for three seconds", wait("3")),
+        Case("return to your start position", HOME),
+        Case("drive over to the counter", go(COUNTER)),
+        Case("hey, where is my mug", find(MUG)),
+        Case("please search for the bottle", find(BOTTLE)),
+        Case("first go to the table, then come back home", seq(go(TABLE), HOME)),
+        Case("can you move to the charger", go(DOCK)),
+        Case("pick up the cup please", fetch(MUG)),
+        Case("please bring the apple over here", fetch(APPLE)),
+        Case("describe what you see", LOOK_AND_TELL),
+        Case("go home now", HOME),
+        Case("uh, bring me something to drink, the bottle", fetch(BOTTLE)),
+        Case("could you get the mug off the counter for me", fetch(MUG)),
+        Case("make your way over to the dock", go(DOCK)),
+    ),
+    stops=(
+        "stop!",
+        "stop please",
+        "halt now",
+        "freeze please",
+        "robot stop now",
+        "emergency stop please",
+        "hey robot, stop",
+        "okay stop",
+        "halt right now",
+        "freeze",
+        "emergency stop",
+        "robot, halt",
+    ),
+    with_stop=(
+        Case("drive to the counter and stop next to it", go(COUNTER)),
+        Case("stop at the counter and pick up the apple", fetch(APPLE)),
+        Case("bring the mug to the table and then stop moving", seq(carry(MUG, TABLE), STOP)),
+        Case("go to the charging dock and stop when you get there", go(DOCK)),
+    ),
+)
+
+SETS: dict[str, SpokenSet] = {s.name: s for s in (DEV, HELDOUT)}

@@ -1,0 +1,151 @@
+"""The spoken stop: an utterance that is a stop phrase ("stop", "halt", "freeze", "robot stop", "emergency stop"),
+alone or with a few words ("now", "right now", "please", "hey robot"), latches the e-stop like the button; "stop"
+inside a longer command ("go to the dock and stop there") is an ordinary command.
+
+Two stages, both pocketsphinx:
+
+1. a keyword spotter (keyphrase search, a threshold per phrase), fed as the audio comes (the robot's microphone
+   hands over each block of speech while it is spoken), finds where a stop phrase may have been said;
+2. the command grammar (with the stop forms and their few extra words) decodes the utterance, also as it comes: only
+   when its sentence is a stop, and not some other command, is the utterance a stop. When the spotter found a stop
+   phrase but the streamed grammar heard no stop, the utterance (if short enough to be a stop with a few words) is
+   decoded once more whole, its steady noise taken out and its cepstrum normalised over it: slower, and surer.
+
+The spotter alone could not tell "freeze" from "please" nor "halt" from "walk" (on the development set no threshold
+separated a stop phrase from the words of ordinary commands); the grammar alone heard 95 of 96 stop utterances and
+none of 256 ordinary commands as a stop, but it maps any speech onto some sentence of its own. Together: the
+spotter says a stop word is there, the grammar says nothing else was said. (The streamed grammar, its cepstrum
+normalised on the fly, heard 88 of the 96: the whole-utterance look is for the rest.) A transcript from another
+recogniser (whisper) is judged by `is_stop_utterance` on its words.
+"""
+
+from __future__ import annotations
+
+import re
+import tempfile
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from robot.planning.world_context import normalize
+from robot.speech.audio import Audio
+
+STOP_PHRASES = ("stop", "halt", "freeze", "robot stop", "emergency stop")
+# Keyphrase thresholds (pocketsphinx compares the phrase's path score against a phone loop with them): loose
+# enough that every stop phrase of the development set was spotted in every voice, clean and at 10 dB of brown
+# noise; the grammar stage rejects what they let through. Longer phrases need lower ones (their scores add up
+# over more frames).
+KWS_THRESHOLDS = {"stop": 1e-40, "halt": 1e-35, "freeze": 1e-25, "robot stop": 1e-60, "emergency stop": 1e-70}
+MAX_STOP_UTTERANCE_S = 3.5  # longer is no stop "with a few words" (with the quiet around it a recording keeps)
+_BEFORE = r"(?:hey|okay|ok|robot|please|now)"
+_AFTER = r"(?:now|right now|please|it|everything|moving|robot|then)"
+_STOP_UTTERANCE = re.compile(rf"^(?:{_BEFORE} )*(?:{'|'.join(STOP_PHRASES)})(?: (?:stop|halt|freeze))*(?: {_AFTER})*$")
+
+
+def is_stop_utterance(text: str) -> bool:
+    """The words are a stop phrase, alone or with a few of the words people add ("stop right now please")."""
+    return bool(_STOP_UTTERANCE.match(" ".join(normalize(text).split())))
+
+
+@dataclass(frozen=True)
+class Spotted:
+    phrase: str
+    start_s: float
+    end_s: float
+
+
+@dataclass(frozen=True)
+class StopVerdict:
+    stop: bool  # the utterance is a stop: latch the e-stop
+    spotted: tuple[Spotted, ...] = ()  # where the keyword spotter heard a stop phrase
+    heard: str = ""  # the command grammar's sentence
+    decode_s: float = 0.0  # the time to the verdict once the last audio was fed
+
+    def as_dict(self) -> dict[str, object]:
+        return {
+            "stop": self.stop,
+            "spotted": [s.phrase for s in self.spotted],
+            "heard": self.heard,
+            "decode_ms": round(self.decode_s * 1000, 1),
+        }
+
+
+class StopSpotter:
+    """Feed an utterance's audio as it comes (`feed`), then `finish` for the verdict; or `spot` a whole one."""
+
+    def __init__(
+        self,
+        objects: dict[str, tuple[str, ...]],
+        places: dict[str, tuple[str, ...]],
+        thresholds: dict[str, float] | None = None,
+    ) -> None:
+        import pocketsphinx
+
+        from robot.speech.sphinx import PocketSphinxASR
+
+        self._dir = tempfile.TemporaryDirectory(prefix="humanoid-stop-")
+        keyphrases = Path(self._dir.name) / "stop.kws"
+        limits = {**KWS_THRESHOLDS, **(thresholds or {})}
+        keyphrases.write_text("".join(f"{phrase} /{limits[phrase]:g}/\n" for phrase in STOP_PHRASES))
+        self._spotter = pocketsphinx.Decoder(kws=str(keyphrases), loglevel="FATAL", dither=False)
+        self._grammar = PocketSphinxASR(objects, places, free_speech=False)
+        grammar_path = self._grammar.grammar.write(Path(self._dir.name) / "commands.gram")
+        # the same grammar decoded as the audio comes, with the grammar recogniser's wide beams: the fast verdict
+        self._streamed = pocketsphinx.Decoder(
+            jsgf=str(grammar_path), beam=1e-80, wbeam=1e-60, pbeam=1e-80, bestpath=False, loglevel="FATAL", dither=False
+        )
+        self._lock = threading.Lock()
+        self._pieces: list[np.ndarray] = []
+
+    def feed(self, samples: np.ndarray) -> None:
+        """More of the utterance (16 kHz int16)."""
+        with self._lock:
+            offset = sum(map(len, self._pieces))
+            if not self._pieces:
+                for decoder in (self._spotter, self._streamed):
+                    decoder.reinit_feat()  # the same verdict for the same audio, whatever came before
+                    decoder.start_utt()
+            pcm = _dither(samples, offset).astype("<i2").tobytes()
+            for decoder in (self._spotter, self._streamed):
+                decoder.process_raw(pcm, full_utt=False)
+            self._pieces.append(np.asarray(samples, np.int16))
+
+    def finish(self) -> StopVerdict:
+        """The verdict on what was fed since the last `finish` (no stop for nothing)."""
+        started = time.perf_counter()
+        with self._lock:
+            if not self._pieces:
+                return StopVerdict(False)
+            audio, self._pieces = Audio(np.concatenate(self._pieces)), []
+            for decoder in (self._spotter, self._streamed):
+                decoder.end_utt()
+            spotted = tuple(
+                Spotted(" ".join(s.word.split()), s.start_frame / 100, s.end_frame / 100)
+                for s in (self._spotter.seg() or ())
+            )
+            hyp = self._streamed.hyp()
+            heard = " ".join(hyp.hypstr.split()) if hyp is not None else ""
+        if spotted and not is_stop_utterance(heard) and audio.duration_s <= MAX_STOP_UTTERANCE_S:
+            heard = self._grammar.command_sentence(audio)  # the slower, surer look
+        stop = bool(spotted) and is_stop_utterance(heard)
+        return StopVerdict(stop, spotted, heard, time.perf_counter() - started)
+
+    def spot(self, audio: Audio) -> StopVerdict:
+        """A whole utterance (the page's recording, a file)."""
+        started = time.perf_counter()
+        self.feed(audio.samples)
+        verdict = self.finish()
+        return StopVerdict(verdict.stop, verdict.spotted, verdict.heard, time.perf_counter() - started)
+
+
+_DITHER = np.random.default_rng(1).integers(-1, 2, 16000 * 16)
+
+
+def _dither(samples: np.ndarray, offset: int) -> np.ndarray:
+    """One bit of noise, the same at the same place in an utterance however the utterance is cut into blocks:
+    digital silence (the log of zero energy) breaks the decoder's features."""
+    noise = _DITHER[(offset + np.arange(len(samples))) % len(_DITHER)]
+    return np.clip(np.asarray(samples, np.int32) + noise, -32768, 32767).astype(np.int16)
