@@ -2,6 +2,12 @@
 
 from __future__ import annotations
 
+import os
+
+# llama.cpp's OpenMP threads (the LLM tests) sleep while they wait instead of spinning, which on a busy machine
+# made a reply 20x slower; read when the library loads, so before any test imports it
+os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+
 from collections.abc import Iterator
 from pathlib import Path
 

@@ -10,6 +10,7 @@ prompted in its own family's format instead (`chat_format`, or chosen from the f
 
 from __future__ import annotations
 
+import os
 import threading
 import time
 from pathlib import Path
@@ -46,6 +47,10 @@ class LocalChat:
         path = Path(model_path).expanduser()
         if not model_path or not path.is_file():
             raise PlanningError(f"local model file not found: {model_path!r} (set HUMANOID_LOCAL_MODEL_PATH to a GGUF)")
+        # llama.cpp's OpenMP threads spin while they wait for each other: on a busy machine (the control loop, the
+        # browsers) a reply took 20x longer (47 s instead of 2.3 s on 2 cores) and took CPU from the robot. Waiting
+        # threads sleep instead; read when the library loads, so set before its first import.
+        os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
         try:
             import llama_cpp
         except ImportError as exc:

@@ -94,7 +94,12 @@ def llama_server(model_path: Path, tmp_path_factory) -> Iterator[LlamaServer]:
         stdout=log,
         stderr=subprocess.STDOUT,
         # its settings read HOST and PORT from the environment over its own options, and `make` exports ours
-        env={**{k: v for k, v in os.environ.items() if k not in ("HOST", "PORT")}, "PYTHONUNBUFFERED": "1"},
+        # and its OpenMP threads sleep while they wait (spinning, a reply on a busy machine took 20x longer)
+        env={
+            **{k: v for k, v in os.environ.items() if k not in ("HOST", "PORT")},
+            "PYTHONUNBUFFERED": "1",
+            "OMP_WAIT_POLICY": "PASSIVE",
+        },
     )
     url = f"http://127.0.0.1:{port}/v1"
     deadline = time.monotonic() + SERVER_START_TIMEOUT_S
