@@ -12,8 +12,8 @@ Wire protocol over one duplex pipe (pickled tuples):
                    | ("beat",) (when nothing else was sent for BEAT_PERIOD_S: the child is answering)
 
 The parent never blocks on the child: `submit_async` sends and hands back a future, and a child that has sent
-nothing for `UNRESPONSIVE_AFTER_S` (frozen, not dead) is said to be not answering: commands other than the e-stop
-are refused at once instead of queueing behind it.
+nothing for `UNRESPONSIVE_AFTER_S` and makes no progress (frozen, not dead: stopped, or using no CPU) is said to be
+not answering: commands other than the e-stop are refused at once instead of queueing behind it.
 """
 
 from __future__ import annotations
@@ -32,6 +32,8 @@ from concurrent.futures import TimeoutError as FutureTimeout
 from dataclasses import dataclass
 from multiprocessing.connection import Connection
 from typing import Any
+
+import psutil
 
 from robot.control.priority import WORKER_FIFO_PRIORITY, raise_thread_priority
 from robot.diagnostics.thresholds import Thresholds
@@ -77,11 +79,66 @@ REPLY_TIMEOUT_S = 90.0
 STARTUP_TIMEOUT_S = 180.0
 # The child says it is there at least this often (state goes at 50 Hz while anything moves; a beat otherwise).
 BEAT_PERIOD_S = 0.1
-# Silent this long: the robot process is not answering (frozen or starved), noticed well within a second.
+# Silent this long and making no progress (stopped, or no CPU time used since): the robot process is frozen,
+# noticed within a second. A process that is silent but busy (an import holding the interpreter lock, a machine
+# so loaded that its threads wait for a core) is slow, not frozen: its commands queue as usual, unless it stays
+# silent for BUSY_SILENCE_S (a loop that never lets go).
 UNRESPONSIVE_AFTER_S = 0.6
+PROGRESS_CPU_S = 0.02  # used in PROGRESS_WINDOW_S: its control loop alone uses more
+PROGRESS_WINDOW_S = 0.3
+BUSY_SILENCE_S = 15.0
 # Commands that must never queue behind a slow one: handled inline by the child's receiving thread.
 _IMMEDIATE = (EStop, ReleaseEStop, CancelPlan, Teleop, StopTeleop, SetPosture, ResetRobot, PlaceObstacle, PausePlan,
               ApprovePlan, ResumePlan, SetApproval, InjectFault, SetTorque, OperatorHeartbeat)  # fmt: skip
+
+
+# stopped (SIGSTOP, a debugger), or gone while its pipe is still open: no progress to wait for
+_STOPPED = (psutil.STATUS_STOPPED, psutil.STATUS_TRACING_STOP, psutil.STATUS_ZOMBIE, psutil.STATUS_DEAD)
+
+
+def _progress(pid: int | None) -> tuple[str, float]:
+    """A process's state and the CPU seconds it has used (its threads together)."""
+    try:
+        process = psutil.Process(pid)
+        with process.oneshot():
+            times = process.cpu_times()
+            return process.status(), times.user + times.system
+    except (psutil.Error, ValueError):
+        return psutil.STATUS_DEAD, 0.0
+
+
+class FreezeWatch:
+    """Tells a frozen process (stopped, or silent and using no CPU) from a slow one (silent but busy)."""
+
+    def __init__(
+        self,
+        probe: Callable[[int | None], tuple[str, float]] = _progress,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self._probe = probe
+        self._clock = clock
+        self._mark: tuple[float, float, float] | None = None  # (last heard, when first found silent, CPU s then)
+
+    def silent_for_s(self, pid: int | None, last_heard: float) -> float:
+        """Seconds since `last_heard` when the process is frozen; 0 while it answers or is silent but busy."""
+        now = self._clock()
+        silent = now - last_heard
+        if silent <= UNRESPONSIVE_AFTER_S:
+            return 0.0
+        if silent > BUSY_SILENCE_S:
+            return silent
+        status, cpu_s = self._probe(pid)
+        if status in _STOPPED:
+            return silent
+        if self._mark is None or self._mark[0] != last_heard:  # silent since then: does it use the CPU meanwhile?
+            self._mark = (last_heard, now, cpu_s)
+            return 0.0
+        if now - self._mark[1] < PROGRESS_WINDOW_S:
+            return 0.0
+        if cpu_s - self._mark[2] < PROGRESS_CPU_S:
+            return silent
+        self._mark = (last_heard, now, cpu_s)  # busy: judged again over the next window
+        return 0.0
 
 
 @dataclass(frozen=True)
@@ -135,6 +192,7 @@ class WorkerProcess:
         self._reader: threading.Thread | None = None
         self._alive = False
         self._last_heard = time.monotonic()
+        self._freeze = FreezeWatch()
         self._taps: list[Callable[[bytes], None]] = []
 
     # lifecycle -------------------------------------------------------------------------------------------------
@@ -240,11 +298,9 @@ class WorkerProcess:
         return self._alive and self._process is not None and self._process.is_alive()
 
     def silent_for_s(self) -> float:
-        """How long the running robot process has sent nothing (0 while it answers, or when it is not running)."""
-        if not self.is_alive():
-            return 0.0
-        silent = time.monotonic() - self._last_heard
-        return silent if silent > UNRESPONSIVE_AFTER_S else 0.0
+        """How long the running robot process has not answered, once it is frozen (0 while it answers, while it is
+        silent but busy, or when it is not running)."""
+        return self._freeze.silent_for_s(self.pid, self._last_heard) if self.is_alive() else 0.0
 
     # RobotPort -------------------------------------------------------------------------------------------------
 

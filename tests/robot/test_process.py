@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import time
 
+import psutil
 import pytest
 
 from robot.interface import EStop, Fault, InjectFault, Level, Mode, PlanState, Refusal, ReleaseEStop, RunCommand
-from robot.process import WorkerProcess
+from robot.process import BUSY_SILENCE_S, FreezeWatch, WorkerProcess
 
 
 @pytest.fixture(scope="module")
@@ -80,3 +81,44 @@ def test_diagnostics_and_faults_cross_the_process_boundary(remote) -> None:
     assert battery.level == Level.WARN and "battery low" in battery.message
     refused = remote.submit(InjectFault(Fault.SERVO_HEAT, target="antenna", value=10))
     assert not refused.accepted and refused.refusal == Refusal.INVALID and "no servo drives" in refused.message
+
+
+class _Probe:
+    """A process as `FreezeWatch` sees it: its state and the CPU seconds it has used, set by the test."""
+
+    def __init__(self) -> None:
+        self.status, self.cpu_s = "sleeping", 1.0
+
+    def __call__(self, pid: int | None) -> tuple[str, float]:
+        return self.status, self.cpu_s
+
+
+def test_a_silent_process_is_frozen_only_when_stopped_or_using_no_cpu_and_a_busy_one_is_slow() -> None:
+    probe, now = _Probe(), [100.0]
+    watch = FreezeWatch(probe, clock=lambda: now[0])
+    heard = 100.0
+
+    def silent_after(seconds: float) -> float:
+        now[0] = heard + seconds
+        return watch.silent_for_s(4242, heard)
+
+    assert silent_after(0.3) == 0.0  # answering
+    # silent and busy (an import holding the interpreter lock, a loaded machine): slow, not frozen
+    assert silent_after(0.7) == 0.0
+    probe.cpu_s += 0.2
+    assert silent_after(1.2) == 0.0
+    # then silent and using no CPU for a whole window: frozen (a deadlock)
+    assert silent_after(1.4) == 0.0  # not yet a whole window since it was last found busy
+    assert silent_after(1.6) == pytest.approx(1.6)
+    # it answers again: no longer silent; then stopped (SIGSTOP): frozen at once
+    heard = 110.0
+    assert silent_after(0.2) == 0.0
+    probe.status = psutil.STATUS_STOPPED
+    assert silent_after(0.7) == pytest.approx(0.7)
+    # busy but silent for very long (a loop that never lets go): not answering either
+    probe.status = "running"
+    heard = 200.0
+    for seconds in (0.7, 5.0, 10.0):
+        probe.cpu_s += 1.0
+        assert silent_after(seconds) == 0.0
+    assert silent_after(BUSY_SILENCE_S + 1) == pytest.approx(BUSY_SILENCE_S + 1)
