@@ -5,8 +5,11 @@ What it does on hardware today: torque on and off (off at start-up until the ope
 the same stop when the control loop stalls past the servos' bus watchdog (which has already stopped them where
 they were) or the browser's deadman lapses, every goal clamped to the joint's limits, servos that stop answering
 or latch a hardware error surfaced in diagnostics (and stopping the robot), and the measured pose for the 3D
-mirror. Walking, perception and plans need the IMU, cameras and feet sensors the servo bus does not carry: the
-core refuses them with `lacks`, the reason.
+mirror. With its senses (`HardwareSenses`: the OpenCR's IMU and the FSR foot modules read in the same tick as the
+servos, or a BNO055 on its own port) the measurements carry the trunk's orientation, angular velocity and the
+feet's forces, a tilt past the fall threshold is a fall, and a sense lost with torque on brings the robot down
+by the controlled stop. What it lacks (no IMU, no foot sensors, no legs' controller) the core refuses with
+`lacks`, the reason.
 """
 
 from __future__ import annotations
@@ -18,9 +21,10 @@ from typing import Any
 
 import numpy as np
 
+from robot.bodies.hardware_senses import HardwareSenses
 from robot.control.stats import LoopStats
-from robot.core.body import BodyLinks, BodySnapshot, CommandHandler, Senses
-from robot.core.measurements import Measurements
+from robot.core.body import BodyLinks, BodySnapshot, CommandHandler
+from robot.core.measurements import FALL_TILT_DEG, Measurements
 from robot.core.safety import LatchWords
 from robot.diagnostics.robot_sources import RobotReadings
 from robot.hardware.bus import BusError, BusReading, DynamixelBus
@@ -58,8 +62,6 @@ class HardwareBody:
 
     kind = "hardware"
     resettable = False
-    senses = Senses(imu=False, foot_sensors=False)
-    lacks = NOT_ON_HARDWARE
     latch_words = HARDWARE_WORDS
     physics_hz = 0.0
     perception = None
@@ -72,7 +74,11 @@ class HardwareBody:
         bus: DynamixelBus | None = None,
         estop_torque_off_s: float = ESTOP_TORQUE_OFF_AFTER_S,
         deadman_s: float = DEADMAN_S,
+        sensing: HardwareSenses | None = None,
+        walking_enabled: bool = False,
     ) -> None:
+        """`sensing`: the IMU and foot sensors (None: the servos alone); `walking_enabled`: the robot is given a
+        legs' controller (without one the core refuses walking and plans)."""
         self.config = config
         self.layout = layout
         self.bus = bus or DynamixelBus(config)
@@ -100,14 +106,9 @@ class HardwareBody:
         yaw = base[2] if len(base) > 2 else 0.0
         self._base = (float(base[0]), float(base[1]), 0.0)
         self._yaw = float(yaw)
-        self._unknown = {  # what the servo bus cannot tell: no IMU, no foot sensors
-            "base_position": np.array(self._base),
-            "base_quat": np.array([np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)]),
-            "imu_quat": np.full(4, np.nan),
-            "imu_gyro": np.full(3, np.nan),
-            "imu_accel": np.full(3, np.nan),
-            "foot_forces": np.full((2, 4), np.nan),
-        }
+        self.sensing = sensing or HardwareSenses(None, None, self._yaw, self.now)
+        self.senses = self.sensing.senses
+        self.lacks = self.sensing.lacks(walking_enabled)
         self._zero_velocities = np.zeros(n)
 
     def bind(self, links: BodyLinks) -> None:
@@ -170,6 +171,9 @@ class HardwareBody:
         if silent:
             self.bus.close()
             raise BusError(f"no answer from {', '.join(silent)} on {self.config.port}")
+        missing = self.sensing.start()
+        if missing:
+            self.links.publish("hardware/sensors", f"not found: {', '.join(missing)}", Level.WARN, missing=missing)
         with self.bus_lock:
             held = self.bus.torque_held()
             if held:  # a robot process died holding the robot up: take it over where it stands, not drop it
@@ -220,6 +224,7 @@ class HardwareBody:
 
     def close(self) -> None:
         """Torque off whatever happened, and let go of the port."""
+        self.sensing.stop()
         try:
             with self.bus_lock:
                 self.bus.set_torque(False)
@@ -319,10 +324,20 @@ class HardwareBody:
         self._positions = np.where(np.isfinite(reading.positions), reading.positions, self._positions)
         for joint in sorted(newly_lost):
             self.links.publish("hardware/servo_lost", f"servo of {joint} stopped answering", Level.ERROR, joint=joint)
+        for sense in self.sensing.read():
+            self._sense_lost(sense)
         return self.latest()
 
+    def _sense_lost(self, sense: str) -> None:
+        """Said; with torque on the robot may be balancing on it: the controlled stop."""
+        self.links.publish("hardware/sensor_lost", f"{sense} stopped: no readings", Level.ERROR, sensor=sense)
+        if self._torque and not self.links.latch.latched:
+            self.links.latch.latch(EStop(source="sensor", reason=f"{sense} stopped giving readings"))
+
     def latest(self) -> Measurements:
-        return Measurements(self.now(), self._positions, self._zero_velocities, **self._unknown)
+        return Measurements(
+            self.now(), self._positions, self._zero_velocities, np.array(self._base), **self.sensing.fields()
+        )
 
     def actuate(self, targets: np.ndarray) -> Measurements:
         if self._torque:
@@ -349,11 +364,13 @@ class HardwareBody:
         """No battery model or telemetry on the real robot yet."""
 
     def snapshot(self, measured: Measurements) -> BodySnapshot:
+        sensed = bool(np.isfinite(measured.imu_quat).all())
+        tilt = measured.tilt_deg if sensed else 0.0
         return BodySnapshot(
             base_position=self._base,
-            base_yaw_rad=self._yaw,
-            tilt_deg=0.0,
-            fallen=False,
+            base_yaw_rad=measured.yaw_rad if sensed else self._yaw,
+            tilt_deg=tilt,
+            fallen=tilt > FALL_TILT_DEG,
             qpos=tuple(self.scene.qpos_with_joints(self._positions).tolist()),
             torque_enabled=self._torque,
         )
@@ -402,6 +419,7 @@ class HardwareBody:
             has_imu=False,
             lost_servos=lambda: self._reading.lost if self._reading is not None else (),
             hardware_ids=[f"XM430-W350 id {j.servo_id}" for j in self.config.joints],
+            devices=self.sensing.statuses,
         )
 
     def _servo_readings(self) -> ServoReadings:

@@ -4,13 +4,19 @@ refuses."""
 
 from __future__ import annotations
 
+import time
+
 from robot.bodies.hardware import DEADMAN_S, ESTOP_TORQUE_OFF_AFTER_S, NOT_ON_HARDWARE, HardwareBody
+from robot.bodies.hardware_senses import HardwareSenses, ImuDriver
 from robot.config import RobotConfig
+from robot.control.locomotion import LocomotionController
 from robot.diagnostics.thresholds import Thresholds
 from robot.hardware.bus import DynamixelBus
+from robot.hardware.bus_sensors import BusSensors
 from robot.hardware.config import HardwareConfig
 from robot.model.world import WorldLayout
 from robot.robot import Robot
+from robot.sensors.bno055 import Bno055Imu
 
 __all__ = ["DEADMAN_S", "ESTOP_TORQUE_OFF_AFTER_S", "NOT_ON_HARDWARE", "HardwareWorker"]
 
@@ -27,8 +33,21 @@ class HardwareWorker(Robot):
         disk_path: str = ".",
         estop_torque_off_s: float = ESTOP_TORQUE_OFF_AFTER_S,
         deadman_s: float = DEADMAN_S,
+        locomotion: LocomotionController | None = None,
+        imu: ImuDriver | None = None,
     ) -> None:
-        body = HardwareBody(config, layout, bus, estop_torque_off_s, deadman_s)
+        """`locomotion`: the legs' controller, for a robot with an IMU and foot sensors (None: postures only);
+        `imu`: an IMU driver to use instead of the one `config.imu` names (tests)."""
+        bus = bus or DynamixelBus(config)
+        body = HardwareBody(
+            config,
+            layout,
+            bus,
+            estop_torque_off_s,
+            deadman_s,
+            sensing=build_senses(config, bus, layout.robot_start, imu),
+            walking_enabled=locomotion is not None,
+        )
         robot = RobotConfig(
             realtime=True,
             control_hz=config.control_hz,
@@ -36,6 +55,21 @@ class HardwareWorker(Robot):
             diagnostics=diagnostics or Thresholds(),
             disk_path=disk_path,
         )
-        super().__init__(body, layout, robot)
+        super().__init__(body, layout, robot, locomotion=locomotion)
         self.hardware = config
         self.bus = body.bus
+
+
+def build_senses(
+    config: HardwareConfig, bus: DynamixelBus, start: tuple[float, ...], imu: ImuDriver | None = None
+) -> HardwareSenses:
+    """The IMU and foot sensors `config` names: boards on the servo bus, or a BNO055 on its own serial port."""
+    clock_zero = time.monotonic()
+
+    def clock() -> float:  # the body's clock: seconds since it was made
+        return time.monotonic() - clock_zero
+
+    if imu is None and config.imu.startswith("bno055:"):
+        imu = Bno055Imu(config.imu.split(":", 1)[1], clock)
+    boards = BusSensors(bus.port, bus.packets, imu=config.imu == "opencr", feet=config.feet == "fsr", clock=clock)
+    return HardwareSenses(boards, imu, float(start[2]) if len(start) > 2 else 0.0, clock)
