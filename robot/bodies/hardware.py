@@ -42,6 +42,8 @@ from robot.interface import (
 )
 from robot.model import humanoid_v1
 from robot.model.world import WorldLayout
+from robot.perception.driver_sensors import DriverSensors
+from robot.perception.service import PerceptionService
 from robot.sim.backend import MujocoSimBackend
 
 ESTOP_TORQUE_OFF_AFTER_S = 3.0  # the controlled stop's crouch has this long before torque goes off
@@ -64,7 +66,6 @@ class HardwareBody:
     resettable = False
     latch_words = HARDWARE_WORDS
     physics_hz = 0.0
-    perception = None
     telemetry = None
 
     def __init__(
@@ -107,13 +108,22 @@ class HardwareBody:
         self._base = (float(base[0]), float(base[1]), 0.0)
         self._yaw = float(yaw)
         self.sensing = sensing or HardwareSenses(None, None, self._yaw, self.now)
+        self.perception: PerceptionService | None = None
         self.senses = self.sensing.senses
         self.lacks = self.sensing.lacks(walking_enabled)
+        self._walking_enabled = walking_enabled
         self._zero_velocities = np.zeros(n)
 
     def bind(self, links: BodyLinks) -> None:
         self._links = links
         links.latch.on_release(self._released)
+        camera, lidar = self.sensing.camera, self.sensing.lidar
+        # their frames are detected, mapped and localised as the simulation's, at the legs' estimate of the trunk
+        if self._walking_enabled and (camera is not None or lidar is not None):
+            layout = self.layout
+            self.perception = PerceptionService(
+                layout, links.latest_state, links.publish, sensors=lambda: DriverSensors(layout, camera, lidar)
+            )
 
     @property
     def links(self) -> BodyLinks:
@@ -172,6 +182,8 @@ class HardwareBody:
             self.bus.close()
             raise BusError(f"no answer from {', '.join(silent)} on {self.config.port}")
         missing = self.sensing.start()
+        if self.perception is not None:
+            self.perception.start()
         if missing:
             self.links.publish("hardware/sensors", f"not found: {', '.join(missing)}", Level.WARN, missing=missing)
         with self.bus_lock:
@@ -224,6 +236,8 @@ class HardwareBody:
 
     def close(self) -> None:
         """Torque off whatever happened, and let go of the port."""
+        if self.perception is not None:
+            self.perception.stop()
         self.sensing.stop()
         try:
             with self.bus_lock:

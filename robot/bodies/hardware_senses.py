@@ -1,6 +1,7 @@
-"""What the real robot senses of itself beside its servos: the IMU (the OpenCR's on the servo bus, or a BNO055 on
-its own serial port) and the feet's force pads (the FSR modules on the servo bus). Each may be missing: the body
-then says what it lacks, and the core refuses only what needs it (walking, plans).
+"""What the real robot senses beside its servos: the IMU (the OpenCR's on the servo bus, or a BNO055 on its own
+serial port), the feet's force pads (the FSR modules on the servo bus), the head camera and the lidar (their
+drivers' threads; the perception service takes their frames). Each may be missing: the body then says what it
+lacks, and the core refuses only what needs it (walking, plans).
 
 `read()` runs in the control tick, under the bus lock, right after the servos are read: the boards on the bus in
 one bulk read; an IMU on its own port is read by its own thread and only its latest sample is taken here.
@@ -10,7 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -38,9 +39,24 @@ class ImuDriver(Protocol):
         """Why it gives no samples now ("" when it does)."""
 
 
+class SensorDriver(Protocol):
+    """A camera or a lidar driver (`robot.sensors`): its own thread, its newest frame, what goes wrong."""
+
+    name: str
+
+    def start(self) -> None: ...
+
+    def stop(self) -> None: ...
+
+    def latest(self) -> Any: ...
+
+    def problem(self) -> str: ...
+
+
 class HardwareSenses:
     """`boards`: the OpenCR and FSR modules to read on the servo bus (None: none); `imu`: an IMU on its own port
-    instead of the OpenCR's; `start_yaw`: the robot's heading at start (the IMU's yaw counts from there)."""
+    instead of the OpenCR's; `camera`, `lidar`: their drivers (None: not fitted); `start_yaw`: the robot's heading
+    at start (the IMU's yaw counts from there)."""
 
     def __init__(
         self,
@@ -48,9 +64,13 @@ class HardwareSenses:
         imu: ImuDriver | None,
         start_yaw: float,
         clock: Callable[[], float],
+        camera: SensorDriver | None = None,
+        lidar: SensorDriver | None = None,
     ) -> None:
         self.boards = boards if boards is not None and not boards.empty else None
         self.imu_driver = imu
+        self.camera = camera
+        self.lidar = lidar
         self.clock = clock
         self.start_yaw = start_yaw
         bus_imu = self.boards is not None and any(b.name == "OpenCR IMU" for b in self.boards.boards)
@@ -65,13 +85,16 @@ class HardwareSenses:
     def start(self) -> list[str]:
         """Find the boards and start the IMU's thread; what is missing, by name."""
         missing = self.boards.probe() if self.boards is not None else []
-        if self.imu_driver is not None:
-            self.imu_driver.start()
+        for driver in self._threads():
+            driver.start()
         return missing
 
     def stop(self) -> None:
-        if self.imu_driver is not None:
-            self.imu_driver.stop()
+        for driver in self._threads():
+            driver.stop()
+
+    def _threads(self) -> list[ImuDriver | SensorDriver]:
+        return [d for d in (self.imu_driver, self.camera, self.lidar) if d is not None]
 
     def lacks(self, walking_enabled: bool) -> str:
         """Why walking and plans are refused ("" when the robot can do them)."""
@@ -176,4 +199,19 @@ class HardwareSenses:
                 out.append(
                     DiagnosticStatus(f"sensors/{side}_foot", level, message, f"FSR id {board.device_id}", values)
                 )
+        for kind, driver in (("camera", self.camera), ("lidar", self.lidar)):
+            if driver is not None:
+                out.append(driver_status(kind, driver))
         return out
+
+
+def driver_status(kind: str, driver: SensorDriver) -> DiagnosticStatus:
+    """A camera's or lidar's health: ERROR with the driver's reason when its frames stop; the counts of what it
+    took and dropped."""
+    problem = driver.problem()
+    values: tuple[tuple[str, float | str], ...] = tuple(
+        (key, getattr(driver, key)) for key in ("frames", "scans", "crc_errors") if hasattr(driver, key)
+    )
+    if problem:
+        return DiagnosticStatus(f"sensors/{kind}_driver", Level.ERROR, f"{driver.name}: {problem}", driver.name, values)
+    return DiagnosticStatus(f"sensors/{kind}_driver", Level.OK, f"{driver.name}: streaming", driver.name, values)

@@ -17,6 +17,8 @@ from robot.hardware.config import HardwareConfig
 from robot.model.world import WorldLayout
 from robot.robot import Robot
 from robot.sensors.bno055 import Bno055Imu
+from robot.sensors.camera import UvcCamera
+from robot.sensors.ld06 import Ld06Lidar
 
 __all__ = ["DEADMAN_S", "ESTOP_TORQUE_OFF_AFTER_S", "NOT_ON_HARDWARE", "HardwareWorker"]
 
@@ -72,4 +74,15 @@ def build_senses(
     if imu is None and config.imu.startswith("bno055:"):
         imu = Bno055Imu(config.imu.split(":", 1)[1], clock)
     boards = BusSensors(bus.port, bus.packets, imu=config.imu == "opencr", feet=config.feet == "fsr", clock=clock)
-    return HardwareSenses(boards, imu, float(start[2]) if len(start) > 2 else 0.0, clock)
+    camera = lidar = None
+    if config.camera == "realsense":
+        from robot.sensors.realsense import RealSenseCamera  # the optional extra: imported only when asked for
+
+        camera = RealSenseCamera(clock=clock)
+    elif config.camera != "none":
+        camera = UvcCamera(config.camera, clock)
+    if config.lidar != "none":
+        model, port = config.lidar.split(":", 1)
+        lidar = Ld06Lidar(port, clock, model=model.upper())
+    yaw = float(start[2]) if len(start) > 2 else 0.0
+    return HardwareSenses(boards, imu, yaw, clock, camera, lidar)

@@ -122,3 +122,35 @@ def test_sensor_settings_are_checked() -> None:
         dataclasses.replace(CONFIG, imu="mpu6050")
     with pytest.raises(ConfigError, match="lidar"):
         dataclasses.replace(CONFIG, lidar="rplidar:/dev/ttyUSB0")
+
+
+def test_a_stalled_camera_and_an_unplugged_lidar_are_said_and_nothing_else_breaks(layout) -> None:
+    from robot.perception.lidar import LaserScan
+    from robot.sensors.ld06_emulator import Ld06Emulator
+    from robot.sensors.mjpeg_server import MjpegServer
+
+    ranges = np.full(360, 2.0, dtype=np.float32)
+    scan = LaserScan(0.0, -math.pi, 2 * math.pi / 360, 0.02, 12.0, ranges, 0.3)
+    image = np.full((120, 160, 3), 90, dtype=np.uint8)
+    with (
+        BusEmulator([j.servo_id for j in CONFIG.joints], sensors=True) as bus,
+        MjpegServer(image) as camera,
+        Ld06Emulator(scan) as lidar,
+    ):
+        config = dataclasses.replace(CONFIG, port=bus.port_name, camera=camera.url, lidar=f"ld06:{lidar.port_name}")
+        robot = HardwareWorker(config, layout, deadman_s=0.0)
+        robot.start()
+        try:
+            assert status(robot, "sensors/camera_driver", Level.OK) and status(robot, "sensors/lidar_driver", Level.OK)
+            lidar.corrupt_packets = 3
+            wait(lambda: dict(status(robot, "sensors/lidar_driver", Level.OK).values)["crc_errors"] == 3)
+            camera.stall = True
+            assert "stalled" in status(robot, "sensors/camera_driver", Level.ERROR).message
+            lidar.unplug()
+            assert "LD06 lidar" in status(robot, "sensors/lidar_driver", Level.ERROR).message
+            # the servos, the IMU and the feet go on: torque, and the robot holds where it is
+            assert robot.submit(SetTorque(True)).accepted
+            wait(lambda: robot.state().torque_enabled)
+            assert status(robot, "sensors/imu", Level.OK) and not robot.state().estop_latched
+        finally:
+            robot.stop()
