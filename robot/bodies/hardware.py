@@ -49,6 +49,7 @@ from robot.sim.backend import MujocoSimBackend
 ESTOP_TORQUE_OFF_AFTER_S = 3.0  # the controlled stop's crouch has this long before torque goes off
 DEADMAN_S = 1.5  # torque on needs an operator heartbeat at least this often (the page sends one every 250 ms)
 CONTROLLED_STOP_SPEED_RAD_S = 0.6
+UPRIGHT_TILT_DEG = 15.0  # a fallen robot stood up again by hand may move again below this tilt
 NOT_ON_HARDWARE = "needs the IMU, cameras and foot sensors, which are not on the servo bus: simulation only for now"
 HARDWARE_WORDS = LatchWords(
     latched="e-stop latched: crouching, then torque off",
@@ -380,6 +381,8 @@ class HardwareBody:
     def snapshot(self, measured: Measurements) -> BodySnapshot:
         sensed = bool(np.isfinite(measured.imu_quat).all())
         tilt = measured.tilt_deg if sensed else 0.0
+        if sensed:
+            self._watch_fall(tilt)
         return BodySnapshot(
             base_position=self._base,
             base_yaw_rad=measured.yaw_rad if sensed else self._yaw,
@@ -388,6 +391,16 @@ class HardwareBody:
             qpos=tuple(self.scene.qpos_with_joints(self._positions).tolist()),
             torque_enabled=self._torque,
         )
+
+    def _watch_fall(self, tilt_deg: float) -> None:
+        """A fall with torque on: the controlled stop (the core holds the joints; the real robot then crouches and
+        lets go). Picked up and upright again with torque off, the robot may move again (no reset on hardware)."""
+        latch = self.links.latch
+        if tilt_deg > FALL_TILT_DEG and self._torque and not latch.latched:
+            latch.latch(EStop(source="fall", reason=f"the robot fell (tilt {tilt_deg:.0f} deg)"))
+        elif latch.fallen and tilt_deg < UPRIGHT_TILT_DEG and not self._torque:
+            latch.stand_up()
+            self.links.publish("hardware/upright", f"upright again (tilt {tilt_deg:.0f} deg): torque on to move")
 
     def tick_error(self, exc: Exception) -> bool:
         if isinstance(exc, BusError):  # said, and the next tick tries again (lost servos are diagnostics' part)

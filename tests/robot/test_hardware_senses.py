@@ -65,10 +65,16 @@ def test_imu_and_feet_reach_the_measurements_and_diagnostics(robot, emulator) ->
     assert robot.submit(Teleop(0.1, 0, 0)).refusal == Refusal.UNSUPPORTED  # no legs' controller given
 
 
-def test_a_tilt_past_the_threshold_is_a_fall(robot, emulator) -> None:
+def test_a_fall_seen_by_the_imu_makes_the_controlled_stop_and_upright_again_it_may_move(robot, emulator) -> None:
+    assert robot.submit(SetTorque(True)).accepted
+    wait(lambda: robot.state().torque_enabled)
     emulator.sense_imu(quat_from_rpy(0.0, math.radians(70), 0.0), [0, 0, 0], [9.0, 0.0, 3.0])
-    wait(lambda: robot.state().fallen)
+    wait(lambda: robot.state().fallen and robot.state().estop_latched)
     assert any(e.kind == "robot/fell" for e in robot.recent_events())
+    wait(lambda: not robot.state().torque_enabled)  # crouched, then let go
+    emulator.sense_imu(quat_from_rpy(0.0, math.radians(3), 0.0), [0, 0, 0], [0.5, 0.0, 9.8])  # picked up
+    wait(lambda: not robot.state().fallen)
+    assert any(e.kind == "hardware/upright" for e in robot.recent_events())
 
 
 def test_an_imu_lost_with_torque_on_stops_the_robot_and_is_said(robot, emulator) -> None:
