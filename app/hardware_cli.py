@@ -45,8 +45,8 @@ def _check(args: argparse.Namespace, settings: Settings) -> int:
 
     config = _config(args, settings)
     bus = DynamixelBus(config)
-    budget = bus.budget()
     boards = BusSensors(bus.port, bus.packets, imu=config.imu == "opencr", feet=config.feet == "fsr")
+    budget = bus.budget(boards.wire_bytes(), 0 if boards.empty else 1)
     try:
         bus.open()
         servos = bus.ping_all()

@@ -169,12 +169,14 @@ class HardwareBody:
         """Open the bus, check every servo answers and the tick fits the bus; torque stays off. Servos found
         holding with torque on (the process before this one died) are held where they stand, then brought down by
         the controlled stop."""
-        budget = self.bus.budget()
+        budget = self.bus.budget(*self.sensing.bus_load())
         if budget.utilisation > 1.0:
             need_ms = budget.wire_ms_per_tick + budget.latency_ms_per_tick
+            boards = " and the sensor boards" if self.sensing.boards is not None else ""
             raise BusError(
-                f"{len(self.joint_names)} servos at {self.config.baudrate} baud need {need_ms:.1f} ms a tick, more "
-                f"than the {1e3 / self.config.control_hz:.0f} ms period: raise the baud rate or lower the control rate"
+                f"{len(self.joint_names)} servos{boards} at {self.config.baudrate} baud need {need_ms:.1f} ms a tick, "
+                f"more than the {1e3 / self.config.control_hz:.0f} ms period: raise the baud rate or lower the "
+                "control rate"
             )
         self.bus.open()
         servos = self.bus.ping_all()

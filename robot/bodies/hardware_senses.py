@@ -96,6 +96,12 @@ class HardwareSenses:
     def _threads(self) -> list[ImuDriver | SensorDriver]:
         return [d for d in (self.imu_driver, self.camera, self.lidar) if d is not None]
 
+    def bus_load(self) -> tuple[int, int]:
+        """What the boards add to each tick on the servo bus: bytes on the wire, and reads (one bulk read)."""
+        if self.boards is None:
+            return 0, 0
+        return self.boards.wire_bytes(), 1
+
     def lacks(self, walking_enabled: bool) -> str:
         """Why walking and plans are refused ("" when the robot can do them)."""
         missing = [

@@ -301,7 +301,9 @@ class EmulatedBus:
         self.stats.replies += 1
         os.write(self._master, reply)
 
-    def _reply(self, servo: EmulatedXM430, error: int, params: bytes = b"", is_read: bool = False) -> list[bytes]:
+    def _reply(
+        self, servo: EmulatedXM430 | EmulatedBoard, error: int, params: bytes = b"", is_read: bool = False
+    ) -> list[bytes]:
         faults = servo.faults
         level = servo.status_return_level
         if faults.dead or (level == 0) or (level == 1 and not is_read):

@@ -98,3 +98,52 @@ def test_a_board_not_on_the_bus_is_missing() -> None:
         reading = sensors.read()
         assert reading.imu is None and np.isnan(reading.feet).all() and len(reading.missing) == 3
         port.closePort()
+
+
+def test_the_boards_read_is_in_the_ticks_bus_budget(rig) -> None:
+    from robot.hardware.bus import tick_budget
+
+    _emulator, sensors = rig
+    # the bulk read: instruction (10 + 5 a board), the OpenCR's 19 bytes and each foot's 10, with 11 bytes of
+    # status each
+    assert sensors.wire_bytes() == 10 + 15 + (11 + 19) + 2 * (11 + 10)
+    alone = tick_budget(24, 2_000_000, 100, 1.0)
+    both = tick_budget(24, 2_000_000, 100, 1.0, extra_bytes=sensors.wire_bytes(), extra_reads=1)
+    assert both.bytes_per_tick == alone.bytes_per_tick + 97
+    assert both.utilisation == pytest.approx(0.545, abs=0.002) and both.fits  # 24 servos + OpenCR + 2 FSR at 2 Mbps
+    assert not tick_budget(24, 1_000_000, 100, 1.0, extra_bytes=97, extra_reads=1).fits  # 87 %: too tight
+
+
+def test_a_stale_reply_that_trips_the_sdks_fast_read_is_read_again_the_plain_way(monkeypatch) -> None:
+    """A board's reply that comes after the bulk read gave up on it can land in the next tick's fast servo read,
+    whose SDK parser then indexes an empty reply (IndexError: a valid packet, but not the fast read's). That is
+    junk on the line, as a bad CRC is: counted, and the servos read again the plain way, not a failed tick."""
+    import dataclasses
+
+    from dynamixel_sdk import GroupSyncRead
+
+    from robot.hardware.bus import DynamixelBus
+    from robot.hardware.config import default_config
+
+    config = dataclasses.replace(default_config(), reply_margin_ms=100.0)
+    with BusEmulator([j.servo_id for j in config.joints]) as emulator:
+        bus = DynamixelBus(dataclasses.replace(config, port=emulator.port_name))
+        bus.open()
+        try:
+            bus.prepare()
+            expected = bus.read().positions
+            real = GroupSyncRead.fastSyncRead
+            tripped = []
+
+            def stale_packet_first(reader: GroupSyncRead) -> int:
+                if not tripped:
+                    tripped.append(True)
+                    raise IndexError("bytearray index out of range")
+                return real(reader)
+
+            monkeypatch.setattr(GroupSyncRead, "fastSyncRead", stale_packet_first)
+            reading = bus.read()
+            assert tripped and reading.lost == () and reading.failed_reads == 0
+            assert np.allclose(reading.positions, expected, atol=1e-3) and bus.counters.crc_errors == 1
+        finally:
+            bus.close()
