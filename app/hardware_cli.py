@@ -103,7 +103,7 @@ def _check(args: argparse.Namespace, settings: Settings) -> int:
 
 def _tilt_deg(quat: Any) -> float:
     """The trunk's tilt from upright (what the fall check compares with its threshold)."""
-    from robot.hardware.opencr import rpy_from_quat
+    from robot.sensors.imu import rpy_from_quat
 
     roll, pitch, _ = rpy_from_quat(quat)
     return math.degrees(math.acos(max(-1.0, min(1.0, math.cos(roll) * math.cos(pitch)))))

@@ -78,9 +78,11 @@ class HardwareBody:
         deadman_s: float = DEADMAN_S,
         sensing: HardwareSenses | None = None,
         walking_enabled: bool = False,
+        started_at: float | None = None,
     ) -> None:
-        """`sensing`: the IMU and foot sensors (None: the servos alone); `walking_enabled`: the robot is given a
-        legs' controller (without one the core refuses walking and plans)."""
+        """`sensing`: the IMU, feet, camera and lidar (None: the servos alone); `walking_enabled`: the robot is given
+        a legs' controller (without one the core refuses walking and plans); `started_at`: the monotonic time its
+        clock counts from (the one its sensors stamp with; default: now)."""
         self.config = config
         self.layout = layout
         self.bus = bus or DynamixelBus(config)
@@ -96,7 +98,7 @@ class HardwareBody:
         self._lock = threading.Lock()
         self._torque_requests: list[SetTorque] = []
         self._heartbeat_s = time.monotonic()
-        self._started_at = time.monotonic()
+        self._started_at = time.monotonic() if started_at is None else started_at
         self._torque = False
         self._estop_since: float | None = None
         self._reading: BusReading | None = None

@@ -17,8 +17,8 @@ import numpy as np
 
 from robot.core.body import Senses
 from robot.hardware.bus_sensors import BoardReading, BusSensors
-from robot.hardware.opencr import ImuSample, quat_from_rpy, rpy_from_quat
 from robot.interface import DiagnosticStatus, Level
+from robot.sensors.imu import ImuSample, quat_from_rpy, rpy_from_quat
 
 IMU_STALE_S = 0.1  # an IMU sample older than this is not the robot's orientation any more
 

@@ -18,7 +18,7 @@ import numpy as np
 from dynamixel_sdk import COMM_RX_CORRUPT, COMM_SUCCESS, GroupBulkRead, PacketHandler, PortHandler
 
 from robot.hardware import fsr, opencr
-from robot.hardware.opencr import ImuSample
+from robot.sensors.imu import ImuSample
 
 log = logging.getLogger(__name__)
 

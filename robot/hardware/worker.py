@@ -5,6 +5,7 @@ refuses."""
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 
 from robot.bodies.hardware import DEADMAN_S, ESTOP_TORQUE_OFF_AFTER_S, NOT_ON_HARDWARE, HardwareBody
 from robot.bodies.hardware_senses import HardwareSenses, ImuDriver
@@ -41,14 +42,20 @@ class HardwareWorker(Robot):
         """`locomotion`: the legs' controller, for a robot with an IMU and foot sensors (None: postures only);
         `imu`: an IMU driver to use instead of the one `config.imu` names (tests)."""
         bus = bus or DynamixelBus(config)
+        started = time.monotonic()  # the body's clock, which its sensors stamp their readings with too
+
+        def clock() -> float:
+            return time.monotonic() - started
+
         body = HardwareBody(
             config,
             layout,
             bus,
             estop_torque_off_s,
             deadman_s,
-            sensing=build_senses(config, bus, layout.robot_start, imu),
+            sensing=build_senses(config, bus, layout.robot_start, clock, imu),
             walking_enabled=locomotion is not None,
+            started_at=started,
         )
         robot = RobotConfig(
             realtime=True,
@@ -63,14 +70,14 @@ class HardwareWorker(Robot):
 
 
 def build_senses(
-    config: HardwareConfig, bus: DynamixelBus, start: tuple[float, ...], imu: ImuDriver | None = None
+    config: HardwareConfig,
+    bus: DynamixelBus,
+    start: tuple[float, ...],
+    clock: Callable[[], float],
+    imu: ImuDriver | None = None,
 ) -> HardwareSenses:
-    """The IMU and foot sensors `config` names: boards on the servo bus, or a BNO055 on its own serial port."""
-    clock_zero = time.monotonic()
-
-    def clock() -> float:  # the body's clock: seconds since it was made
-        return time.monotonic() - clock_zero
-
+    """The senses `config` names: the IMU and feet (boards on the servo bus, or a BNO055 on its own serial port),
+    the camera and the lidar; `clock`: the body's, to stamp their readings."""
     if imu is None and config.imu.startswith("bno055:"):
         imu = Bno055Imu(config.imu.split(":", 1)[1], clock)
     boards = BusSensors(bus.port, bus.packets, imu=config.imu == "opencr", feet=config.feet == "fsr", clock=clock)

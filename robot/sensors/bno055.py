@@ -17,8 +17,8 @@ from collections.abc import Callable
 
 import serial
 
-from robot.hardware.opencr import ImuSample
 from robot.sensors import bno055_protocol as bno
+from robot.sensors.imu import ImuSample
 
 log = logging.getLogger(__name__)
 

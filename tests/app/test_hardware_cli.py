@@ -52,7 +52,7 @@ def test_init_check_and_calibrate(robot_toml, capsys) -> None:
 def test_check_finds_the_sensor_boards_and_reads_the_imu(robot_toml, capsys, monkeypatch) -> None:
     import math
 
-    from robot.hardware.opencr import quat_from_rpy
+    from robot.sensors.imu import quat_from_rpy
 
     monkeypatch.setenv("HUMANOID_IMU", "opencr")
     monkeypatch.setenv("HUMANOID_FEET", "fsr")

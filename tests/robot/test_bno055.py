@@ -9,10 +9,10 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 
-from robot.hardware.opencr import quat_from_rpy, rpy_from_quat
 from robot.sensors import bno055_protocol as bno
 from robot.sensors.bno055 import Bno055Imu
 from robot.sensors.bno055_emulator import Bno055Emulator
+from robot.sensors.imu import quat_from_rpy, rpy_from_quat
 
 
 def wait(predicate, timeout: float = 10.0):

@@ -14,7 +14,7 @@ from robot.hardware import fsr, opencr
 from robot.hardware.bus import LowLatencyPortHandler
 from robot.hardware.bus_emulator import BusEmulator
 from robot.hardware.bus_sensors import BusSensors
-from robot.hardware.opencr import quat_from_rpy, rpy_from_quat
+from robot.sensors.imu import quat_from_rpy, rpy_from_quat
 
 
 @pytest.fixture

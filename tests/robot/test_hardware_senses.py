@@ -15,11 +15,11 @@ import pytest
 from robot.hardware import fsr, opencr
 from robot.hardware.bus_emulator import BusEmulator
 from robot.hardware.config import ConfigError, default_config
-from robot.hardware.opencr import quat_from_rpy
 from robot.hardware.worker import HardwareWorker
 from robot.interface import Level, Refusal, RunCommand, SetTorque, Teleop
 from robot.sensors.bno055 import Bno055Imu
 from robot.sensors.bno055_emulator import Bno055Emulator
+from robot.sensors.imu import quat_from_rpy
 
 CONFIG = dataclasses.replace(default_config(), reply_margin_ms=100.0, imu="opencr", feet="fsr")
 
