@@ -25,9 +25,19 @@ def _serve(args: argparse.Namespace, settings: Settings) -> int:
     from app.sessions.db import upgrade_to_head
 
     http_port, device = _split_port(args.port)
-    overrides = {"seed": args.seed, "enable_mirror": not args.no_mirror, "host": args.host,
-                 "port": args.http_port or http_port, "backend": args.backend, "dynamixel_port": device,
-                 "robot_config": args.robot_config}  # fmt: skip
+    overrides = {
+        "seed": args.seed,
+        "enable_mirror": not args.no_mirror,
+        "host": args.host,
+        "port": args.http_port or http_port,
+        "backend": args.backend,
+        "dynamixel_port": device,
+        "robot_config": args.robot_config,
+        "imu": args.imu,
+        "feet": args.feet,
+        "camera": args.camera,
+        "lidar": args.lidar,
+    }
     settings = settings.model_copy(update={k: v for k, v in overrides.items() if v is not None})
     if args.viser_port is not None:
         settings = settings.model_copy(update={"viser_port": args.viser_port})
@@ -291,6 +301,18 @@ def build_parser() -> argparse.ArgumentParser:
     serve.add_argument("--backend", choices=["sim", "dynamixel"], default=None,
                        help="sim (MuJoCo, the default) or dynamixel (the real robot's XM430s)")  # fmt: skip
     serve.add_argument("--robot-config", default=None, help="the real robot's configuration file (robot.toml)")
+    serve.add_argument(
+        "--imu",
+        default=None,
+        help="with --backend dynamixel: opencr (ID 200 on the servo bus), bno055:/dev/ttyX, or none",
+    )
+    serve.add_argument("--feet", default=None, help="with --backend dynamixel: fsr (IDs 111, 112 on the bus) or none")
+    serve.add_argument(
+        "--camera",
+        default=None,
+        help="with --backend dynamixel: an OpenCV device index, path or stream URL, realsense, or none",
+    )
+    serve.add_argument("--lidar", default=None, help="with --backend dynamixel: ld06:/dev/ttyY, ld19:/dev/ttyY or none")
     serve.add_argument(
         "--viser-port",
         type=int,

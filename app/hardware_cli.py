@@ -5,8 +5,10 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import math
 import sys
 from pathlib import Path
+from typing import Any
 
 from app.settings import Settings
 from robot.hardware.config import HardwareConfig
@@ -34,17 +36,22 @@ def _init_config(args: argparse.Namespace, settings: Settings) -> int:
 
 
 def _check(args: argparse.Namespace, settings: Settings) -> int:
-    """Ping every configured servo: model, firmware, latched hardware errors; and the control tick's bus budget."""
+    """Ping every configured servo: model, firmware, latched hardware errors; the sensor boards the configuration
+    puts on the bus (the OpenCR's IMU, the FSR feet), with one reading each; and the control tick's bus budget."""
     from robot.hardware.bus import BusError, DynamixelBus
+    from robot.hardware.bus_sensors import BusSensors
     from robot.hardware.control_table import XM430_W350_MODEL
     from robot.hardware.xm430 import HardwareError
 
     config = _config(args, settings)
     bus = DynamixelBus(config)
-    budget = bus.budget()
+    boards = BusSensors(bus.port, bus.packets, imu=config.imu == "opencr", feet=config.feet == "fsr")
+    budget = bus.budget(boards.wire_bytes(), 0 if boards.empty else 1)
     try:
         bus.open()
         servos = bus.ping_all()
+        missing_boards = boards.probe()
+        sensed = boards.read()
     except BusError as exc:
         print(f"cannot check {config.port}: {exc}", file=sys.stderr)
         return 2
@@ -70,6 +77,12 @@ def _check(args: argparse.Namespace, settings: Settings) -> int:
         "bus_utilisation": round(budget.utilisation, 3),
         "bytes_per_tick": budget.bytes_per_tick,
         "fits": budget.fits,
+        "sensor_boards": [
+            {"name": b.name, "id": b.device_id, "found": not any(b.name in m for m in missing_boards)}
+            for b in boards.boards
+        ],
+        "imu_tilt_deg": round(_tilt_deg(sensed.imu.quat), 1) if sensed.imu is not None else None,
+        "foot_forces_n": [[round(float(f), 2) for f in foot] for foot in sensed.feet] if config.feet == "fsr" else None,
     }
     if args.json:
         print(json.dumps(report, indent=2))
@@ -77,11 +90,23 @@ def _check(args: argparse.Namespace, settings: Settings) -> int:
         for r in rows:
             state = "missing" if r["model"] is None else f"model {r['model']} fw {r['firmware']}: {r['hardware_error']}"
             print(f"{r['id']:>3} {r['joint']:<12} {state}")
+        for board in report["sensor_boards"]:
+            print(f"{board['id']:>3} {board['name']:<16} {'found' if board['found'] else 'missing'}")
+        if report["imu_tilt_deg"] is not None:
+            print(f"IMU tilt {report['imu_tilt_deg']} deg (stand the robot upright: it should be near 0)")
         print(
             f"{report['answered']}/{report['expected']} answered; the control tick uses "
             f"{budget.utilisation:.0%} of the bus at {config.baudrate} baud"
         )
-    return 0 if all(r["ok"] for r in rows) else 1
+    return 0 if all(r["ok"] for r in rows) and not missing_boards else 1
+
+
+def _tilt_deg(quat: Any) -> float:
+    """The trunk's tilt from upright (what the fall check compares with its threshold)."""
+    from robot.sensors.imu import rpy_from_quat
+
+    roll, pitch, _ = rpy_from_quat(quat)
+    return math.degrees(math.acos(max(-1.0, min(1.0, math.cos(roll) * math.cos(pitch)))))
 
 
 def _calibrate(args: argparse.Namespace, settings: Settings) -> int:

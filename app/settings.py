@@ -56,6 +56,13 @@ class Settings(BaseSettings):
         "script has sent a heartbeat for this long; 0 turns the deadman off",
     )
     dynamixel_port: str = Field("", description="the U2D2's serial device; overrides the robot configuration's")
+    imu: str = Field("", description="real robot's IMU: opencr, bno055:<serial port> or none (empty: robot.toml's)")
+    feet: str = Field("", description="real robot's foot sensors: fsr or none (empty: robot.toml's)")
+    camera: str = Field(
+        "",
+        description="real robot's head camera: a device index, path or URL, realsense, or none (empty: robot.toml's)",
+    )
+    lidar: str = Field("", description="real robot's lidar: ld06:<serial port>, ld19:<serial port> or none")
     seed: int = Field(0, ge=0)
     control_hz: float = Field(100.0, gt=0, le=1000)
     mirror_hz: float = Field(30.0, gt=0, le=120)
@@ -168,7 +175,14 @@ class Settings(BaseSettings):
         """The robot configuration file (the humanoid_v1 defaults when there is none yet), with the port set here."""
         path = Path(self.robot_config)
         config = load_config(path) if path.exists() else default_config()
-        return replace(config, port=self.dynamixel_port) if self.dynamixel_port else config
+        overrides = {
+            "port": self.dynamixel_port,
+            "imu": self.imu,
+            "feet": self.feet,
+            "camera": self.camera,
+            "lidar": self.lidar,
+        }
+        return replace(config, **{key: value for key, value in overrides.items() if value})
 
     def planner_config(self) -> PlannerConfig:
         return PlannerConfig(

@@ -7,6 +7,9 @@ Per baud rate (1, 2 (the default) and 4 Mbps) and way of reading (Fast Sync Read
 - at the control rate (100 Hz): the share of each period the bus was busy, measured by the emulator (bytes both
   ways at the baud rate), next to the budget the backend computes at start-up;
 - a servo that stops answering: ticks until it is declared lost.
+
+At 2 Mbps with Fast Sync Read, once more with the OP3's sensor boards on the bus (the OpenCR at ID 200, the FSR
+feet at 111 and 112), read each tick by one bulk read after the servos (`sensor_read_ms`: that read's time).
 """
 
 from __future__ import annotations
@@ -29,27 +32,36 @@ def _stats(values: list[float]) -> dict[str, float]:
     }
 
 
-def _one_rate(baudrate: int, seconds: float, fast: bool) -> dict[str, Any]:
+def _one_rate(baudrate: int, seconds: float, fast: bool, sensors: bool = False) -> dict[str, Any]:
     from robot.control.priority import raise_thread_priority
     from robot.hardware.bus import DynamixelBus
     from robot.hardware.bus_emulator import BusEmulator
+    from robot.hardware.bus_sensors import BusSensors
     from robot.hardware.config import default_config
 
     config = dataclasses.replace(default_config(baudrate=baudrate), reply_margin_ms=20.0, fast_sync_read=fast)
-    with BusEmulator([j.servo_id for j in config.joints], baudrate=baudrate, wire_time=True) as emulator:
+    ids = [j.servo_id for j in config.joints]
+    with BusEmulator(ids, baudrate=baudrate, wire_time=True, sensors=sensors) as emulator:
         bus = DynamixelBus(dataclasses.replace(config, port=emulator.port_name))
+        boards = BusSensors(bus.port, bus.packets, imu=sensors, feet=sensors)
         raise_thread_priority()  # as the backend's control loop runs (real time where allowed)
         bus.open()
         try:
             bus.prepare()  # as the backend starts: no return delay
             bus.set_torque(True)
+            boards.probe()
             goals = np.zeros(len(config.joints))
             ticks: list[float] = []
+            sensor_reads: list[float] = []
             started = time.perf_counter()
             while time.perf_counter() - started < seconds:
                 t0 = time.perf_counter()
                 bus.write_goals(goals)
                 bus.read()
+                if sensors:
+                    t1 = time.perf_counter()
+                    boards.read()
+                    sensor_reads.append((time.perf_counter() - t1) * 1e3)
                 ticks.append((time.perf_counter() - t0) * 1e3)
             flat_hz = len(ticks) / (time.perf_counter() - started)
             busy0, wall0 = emulator.stats().busy_s, time.perf_counter()
@@ -60,6 +72,7 @@ def _one_rate(baudrate: int, seconds: float, fast: bool) -> dict[str, Any]:
                 next_tick += period
                 bus.write_goals(goals)
                 bus.read()
+                boards.read()
                 paced += 1
                 time.sleep(max(0.0, next_tick - time.perf_counter()))
             busy = (emulator.stats().busy_s - busy0) / (time.perf_counter() - wall0)
@@ -68,11 +81,13 @@ def _one_rate(baudrate: int, seconds: float, fast: bool) -> dict[str, Any]:
             lost_after = 0
             while "r_knee" not in bus.read().lost:
                 lost_after += 1
-            budget = bus.budget()
+            budget = bus.budget(boards.wire_bytes(), 0 if boards.empty else 1)
             return {
                 "baudrate": baudrate,
                 "sync_read": "fast" if fast else "plain",
                 "servos": len(config.joints),
+                "sensor_boards": len(boards.boards),
+                "sensor_read_ms": _stats(sensor_reads) if sensor_reads else None,
                 "flat_out_hz": round(flat_hz, 1),
                 "tick_ms": _stats(ticks),
                 "paced_hz": round(paced_hz, 1),
@@ -97,10 +112,12 @@ def run_dynamixel(seconds: float = 10.0, baudrates: tuple[int, ...] = BAUDRATES)
     started = time.perf_counter()
     rates = [_one_rate(b, seconds, fast) for b in baudrates for fast in (True, False)]
     default = [r for r in rates if r["sync_read"] == "fast"]
+    with_sensors = _one_rate(2_000_000, seconds, True, sensors=True)
     return {
         "suite": "dynamixel",
         "seconds_per_phase": seconds,
         "rates": rates,
+        "with_sensor_boards": with_sensors,
         "bars": {
             "loop_hz": {
                 "target": TARGETS["loop_hz"],

@@ -5,8 +5,11 @@ What it does on hardware today: torque on and off (off at start-up until the ope
 the same stop when the control loop stalls past the servos' bus watchdog (which has already stopped them where
 they were) or the browser's deadman lapses, every goal clamped to the joint's limits, servos that stop answering
 or latch a hardware error surfaced in diagnostics (and stopping the robot), and the measured pose for the 3D
-mirror. Walking, perception and plans need the IMU, cameras and feet sensors the servo bus does not carry: the
-core refuses them with `lacks`, the reason.
+mirror. With its senses (`HardwareSenses`: the OpenCR's IMU and the FSR foot modules read in the same tick as the
+servos, or a BNO055 on its own port) the measurements carry the trunk's orientation, angular velocity and the
+feet's forces, a tilt past the fall threshold is a fall, and a sense lost with torque on brings the robot down
+by the controlled stop. What it lacks (no IMU, no foot sensors, no legs' controller) the core refuses with
+`lacks`, the reason.
 """
 
 from __future__ import annotations
@@ -18,9 +21,10 @@ from typing import Any
 
 import numpy as np
 
+from robot.bodies.hardware_senses import HardwareSenses
 from robot.control.stats import LoopStats
-from robot.core.body import BodyLinks, BodySnapshot, CommandHandler, Senses
-from robot.core.measurements import Measurements
+from robot.core.body import BodyLinks, BodySnapshot, CommandHandler
+from robot.core.measurements import FALL_TILT_DEG, Measurements
 from robot.core.safety import LatchWords
 from robot.diagnostics.robot_sources import RobotReadings
 from robot.hardware.bus import BusError, BusReading, DynamixelBus
@@ -38,11 +42,14 @@ from robot.interface import (
 )
 from robot.model import humanoid_v1
 from robot.model.world import WorldLayout
+from robot.perception.driver_sensors import DriverSensors
+from robot.perception.service import PerceptionService
 from robot.sim.backend import MujocoSimBackend
 
 ESTOP_TORQUE_OFF_AFTER_S = 3.0  # the controlled stop's crouch has this long before torque goes off
 DEADMAN_S = 1.5  # torque on needs an operator heartbeat at least this often (the page sends one every 250 ms)
 CONTROLLED_STOP_SPEED_RAD_S = 0.6
+UPRIGHT_TILT_DEG = 15.0  # a fallen robot stood up again by hand may move again below this tilt
 NOT_ON_HARDWARE = "needs the IMU, cameras and foot sensors, which are not on the servo bus: simulation only for now"
 HARDWARE_WORDS = LatchWords(
     latched="e-stop latched: crouching, then torque off",
@@ -58,11 +65,8 @@ class HardwareBody:
 
     kind = "hardware"
     resettable = False
-    senses = Senses(imu=False, foot_sensors=False)
-    lacks = NOT_ON_HARDWARE
     latch_words = HARDWARE_WORDS
     physics_hz = 0.0
-    perception = None
     telemetry = None
 
     def __init__(
@@ -72,7 +76,13 @@ class HardwareBody:
         bus: DynamixelBus | None = None,
         estop_torque_off_s: float = ESTOP_TORQUE_OFF_AFTER_S,
         deadman_s: float = DEADMAN_S,
+        sensing: HardwareSenses | None = None,
+        walking_enabled: bool = False,
+        started_at: float | None = None,
     ) -> None:
+        """`sensing`: the IMU, feet, camera and lidar (None: the servos alone); `walking_enabled`: the robot is given
+        a legs' controller (without one the core refuses walking and plans); `started_at`: the monotonic time its
+        clock counts from (the one its sensors stamp with; default: now)."""
         self.config = config
         self.layout = layout
         self.bus = bus or DynamixelBus(config)
@@ -88,7 +98,7 @@ class HardwareBody:
         self._lock = threading.Lock()
         self._torque_requests: list[SetTorque] = []
         self._heartbeat_s = time.monotonic()
-        self._started_at = time.monotonic()
+        self._started_at = time.monotonic() if started_at is None else started_at
         self._torque = False
         self._estop_since: float | None = None
         self._reading: BusReading | None = None
@@ -100,19 +110,23 @@ class HardwareBody:
         yaw = base[2] if len(base) > 2 else 0.0
         self._base = (float(base[0]), float(base[1]), 0.0)
         self._yaw = float(yaw)
-        self._unknown = {  # what the servo bus cannot tell: no IMU, no foot sensors
-            "base_position": np.array(self._base),
-            "base_quat": np.array([np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)]),
-            "imu_quat": np.full(4, np.nan),
-            "imu_gyro": np.full(3, np.nan),
-            "imu_accel": np.full(3, np.nan),
-            "foot_forces": np.full((2, 4), np.nan),
-        }
+        self.sensing = sensing or HardwareSenses(None, None, self._yaw, self.now)
+        self.perception: PerceptionService | None = None
+        self.senses = self.sensing.senses
+        self.lacks = self.sensing.lacks(walking_enabled)
+        self._walking_enabled = walking_enabled
         self._zero_velocities = np.zeros(n)
 
     def bind(self, links: BodyLinks) -> None:
         self._links = links
         links.latch.on_release(self._released)
+        camera, lidar = self.sensing.camera, self.sensing.lidar
+        # their frames are detected, mapped and localised as the simulation's, at the legs' estimate of the trunk
+        if self._walking_enabled and (camera is not None or lidar is not None):
+            layout = self.layout
+            self.perception = PerceptionService(
+                layout, links.latest_state, links.publish, sensors=lambda: DriverSensors(layout, camera, lidar)
+            )
 
     @property
     def links(self) -> BodyLinks:
@@ -157,12 +171,14 @@ class HardwareBody:
         """Open the bus, check every servo answers and the tick fits the bus; torque stays off. Servos found
         holding with torque on (the process before this one died) are held where they stand, then brought down by
         the controlled stop."""
-        budget = self.bus.budget()
+        budget = self.bus.budget(*self.sensing.bus_load())
         if budget.utilisation > 1.0:
             need_ms = budget.wire_ms_per_tick + budget.latency_ms_per_tick
+            boards = " and the sensor boards" if self.sensing.boards is not None else ""
             raise BusError(
-                f"{len(self.joint_names)} servos at {self.config.baudrate} baud need {need_ms:.1f} ms a tick, more "
-                f"than the {1e3 / self.config.control_hz:.0f} ms period: raise the baud rate or lower the control rate"
+                f"{len(self.joint_names)} servos{boards} at {self.config.baudrate} baud need {need_ms:.1f} ms a tick, "
+                f"more than the {1e3 / self.config.control_hz:.0f} ms period: raise the baud rate or lower the "
+                "control rate"
             )
         self.bus.open()
         servos = self.bus.ping_all()
@@ -170,6 +186,11 @@ class HardwareBody:
         if silent:
             self.bus.close()
             raise BusError(f"no answer from {', '.join(silent)} on {self.config.port}")
+        missing = self.sensing.start()
+        if self.perception is not None:
+            self.perception.start()
+        if missing:
+            self.links.publish("hardware/sensors", f"not found: {', '.join(missing)}", Level.WARN, missing=missing)
         with self.bus_lock:
             held = self.bus.torque_held()
             if held:  # a robot process died holding the robot up: take it over where it stands, not drop it
@@ -220,6 +241,9 @@ class HardwareBody:
 
     def close(self) -> None:
         """Torque off whatever happened, and let go of the port."""
+        if self.perception is not None:
+            self.perception.stop()
+        self.sensing.stop()
         try:
             with self.bus_lock:
                 self.bus.set_torque(False)
@@ -319,10 +343,20 @@ class HardwareBody:
         self._positions = np.where(np.isfinite(reading.positions), reading.positions, self._positions)
         for joint in sorted(newly_lost):
             self.links.publish("hardware/servo_lost", f"servo of {joint} stopped answering", Level.ERROR, joint=joint)
+        for sense in self.sensing.read():
+            self._sense_lost(sense)
         return self.latest()
 
+    def _sense_lost(self, sense: str) -> None:
+        """Said; with torque on the robot may be balancing on it: the controlled stop."""
+        self.links.publish("hardware/sensor_lost", f"{sense} stopped: no readings", Level.ERROR, sensor=sense)
+        if self._torque and not self.links.latch.latched:
+            self.links.latch.latch(EStop(source="sensor", reason=f"{sense} stopped giving readings"))
+
     def latest(self) -> Measurements:
-        return Measurements(self.now(), self._positions, self._zero_velocities, **self._unknown)
+        return Measurements(
+            self.now(), self._positions, self._zero_velocities, np.array(self._base), **self.sensing.fields()
+        )
 
     def actuate(self, targets: np.ndarray) -> Measurements:
         if self._torque:
@@ -349,14 +383,28 @@ class HardwareBody:
         """No battery model or telemetry on the real robot yet."""
 
     def snapshot(self, measured: Measurements) -> BodySnapshot:
+        sensed = bool(np.isfinite(measured.imu_quat).all())
+        tilt = measured.tilt_deg if sensed else 0.0
+        if sensed:
+            self._watch_fall(tilt)
         return BodySnapshot(
             base_position=self._base,
-            base_yaw_rad=self._yaw,
-            tilt_deg=0.0,
-            fallen=False,
+            base_yaw_rad=measured.yaw_rad if sensed else self._yaw,
+            tilt_deg=tilt,
+            fallen=tilt > FALL_TILT_DEG,
             qpos=tuple(self.scene.qpos_with_joints(self._positions).tolist()),
             torque_enabled=self._torque,
         )
+
+    def _watch_fall(self, tilt_deg: float) -> None:
+        """A fall with torque on: the controlled stop (the core holds the joints; the real robot then crouches and
+        lets go). Picked up and upright again with torque off, the robot may move again (no reset on hardware)."""
+        latch = self.links.latch
+        if tilt_deg > FALL_TILT_DEG and self._torque and not latch.latched:
+            latch.latch(EStop(source="fall", reason=f"the robot fell (tilt {tilt_deg:.0f} deg)"))
+        elif latch.fallen and tilt_deg < UPRIGHT_TILT_DEG and not self._torque:
+            latch.stand_up()
+            self.links.publish("hardware/upright", f"upright again (tilt {tilt_deg:.0f} deg): torque on to move")
 
     def tick_error(self, exc: Exception) -> bool:
         if isinstance(exc, BusError):  # said, and the next tick tries again (lost servos are diagnostics' part)
@@ -402,6 +450,7 @@ class HardwareBody:
             has_imu=False,
             lost_servos=lambda: self._reading.lost if self._reading is not None else (),
             hardware_ids=[f"XM430-W350 id {j.servo_id}" for j in self.config.joints],
+            devices=self.sensing.statuses,
         )
 
     def _servo_readings(self) -> ServoReadings:

@@ -38,6 +38,7 @@ class RobotReadings:
     has_imu: bool = True
     lost_servos: Callable[[], tuple[str, ...]] = lambda: ()
     hardware_ids: Sequence[str] | None = None  # e.g. "XM430-W350 id 13"
+    devices: Callable[[], list[DiagnosticStatus]] = lambda: []  # a real robot's own sensor drivers
 
 
 class RobotDiagnostics:
@@ -127,7 +128,7 @@ class RobotDiagnostics:
             r.sensor_hz,
             self.limits,
         )
-        return statuses if r.has_imu else [s for s in statuses if s.name != "sensors/imu"]
+        return (statuses if r.has_imu else [s for s in statuses if s.name != "sensors/imu"]) + r.devices()
 
     def _links(self) -> list[DiagnosticStatus]:
         out = [

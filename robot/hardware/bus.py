@@ -103,15 +103,25 @@ def read_bytes(servos: int, data_bytes: int, fast: bool) -> int:
     return asked + servos * (STATUS_OVERHEAD_BYTES + data_bytes)
 
 
-def tick_budget(servos: int, baudrate: int, control_hz: float, latency_timer_ms: float, fast: bool = True) -> BusBudget:
+def tick_budget(
+    servos: int,
+    baudrate: int,
+    control_hz: float,
+    latency_timer_ms: float,
+    fast: bool = True,
+    extra_bytes: int = 0,
+    extra_reads: int = 0,
+) -> BusBudget:
     """What one tick costs: a sync write of 4-byte goals, a sync read of the fast block, and the slow blocks'
-    share; each transaction waits out the USB latency once."""
+    share; each transaction waits out the USB latency once. `extra_bytes` and `extra_reads`: the sensor boards'
+    bulk read, if any (see `bus_sensors.BusSensors.wire_bytes`)."""
     write = INSTRUCTION_OVERHEAD_BYTES + SYNC_PARAMS_BYTES + servos * 5
     read = read_bytes(servos, FAST[1], fast)
     slow = sum(read_bytes(servos, n, fast) for _, n in (SLOW_ERRORS, SLOW_POWER)) / SLOW_EVERY
-    total = write + read + slow
+    total = write + read + slow + extra_bytes
     wire_ms = total * 10 / baudrate * 1e3
-    latency_ms = latency_timer_ms * (1 + 2 / SLOW_EVERY)  # the read (and the slow reads) wait for the USB frame
+    # the read (and the slow reads, and the sensors' bulk read) each wait for the USB frame
+    latency_ms = latency_timer_ms * (1 + 2 / SLOW_EVERY + extra_reads)
     return BusBudget(total, wire_ms, latency_ms, (wire_ms + latency_ms) / (1e3 / control_hz))
 
 
@@ -176,9 +186,12 @@ class DynamixelBus:
             self.port.closePort()
             self._is_open = False
 
-    def budget(self) -> BusBudget:
+    def budget(self, extra_bytes: int = 0, extra_reads: int = 0) -> BusBudget:
+        """This configuration's tick, with the sensor boards' read (`extra_bytes` in `extra_reads` reads) if any."""
         c = self.config
-        return tick_budget(len(self.joints), c.baudrate, c.control_hz, c.latency_timer_ms, c.fast_sync_read)
+        return tick_budget(
+            len(self.joints), c.baudrate, c.control_hz, c.latency_timer_ms, c.fast_sync_read, extra_bytes, extra_reads
+        )
 
     def ping_all(self) -> list[ServoInfo]:
         """Every configured servo: its model and firmware, and its latched hardware error; model None if silent."""
@@ -307,7 +320,11 @@ class DynamixelBus:
             return 0
         fast_result = COMM_SUCCESS
         if self.config.fast_sync_read:
-            fast_result = reader.fastSyncRead()
+            try:
+                fast_result = reader.fastSyncRead()
+            except (IndexError, ValueError):  # the SDK's parser trips on stale bytes (a reply that came too late)
+                self.port.clearPort()
+                fast_result = COMM_RX_CORRUPT
             if fast_result == COMM_SUCCESS:
                 for servo_id in ids:
                     self._health[servo_id].failures = 0

@@ -27,6 +27,7 @@ from multiprocessing.connection import Connection
 from typing import Any
 
 from robot.hardware import control_table as ct
+from robot.hardware.emulated_faults import ServoFaults
 from robot.hardware.protocol2 import (
     ALERT_BIT,
     BROADCAST_ID,
@@ -37,6 +38,7 @@ from robot.hardware.protocol2 import (
     fast_sync_status,
     status,
 )
+from robot.hardware.sensor_emulators import EmulatedBoard, op3_sensor_boards
 from robot.hardware.xm430 import HardwareError
 
 NO_LOAD_SPEED_RAD_S = 46.0 * 2 * math.pi / 60  # 46 rpm at 12 V
@@ -44,13 +46,6 @@ STALL_TORQUE_NM = 4.1
 RESISTANCE_OHM = 12.0 / 2.3
 THERMAL_K_PER_W, THERMAL_TAU_S = 6.0, 360.0
 EMULATOR_FIFO_PRIORITY = 50  # above the robot worker's own threads (40), as hardware is
-
-
-@dataclass
-class ServoFaults:
-    dead: bool = False  # answers nothing at all
-    drop_replies: int = 0  # the next n replies are not sent (the master times out)
-    corrupt_replies: int = 0  # the next n replies carry a wrong CRC
 
 
 class EmulatedXM430:
@@ -81,6 +76,14 @@ class EmulatedXM430:
 
     def get(self, field: ct.Field) -> int:
         return field.decode(bytes(self.table[field.address : field.address + field.size]))
+
+    @property
+    def status_return_level(self) -> int:
+        return self.get(ct.STATUS_RETURN_LEVEL)
+
+    def ping_info(self) -> bytes:
+        """Model number and firmware version, as a ping's reply carries them."""
+        return ct.MODEL_NUMBER.encode(self.get(ct.MODEL_NUMBER)) + bytes([self.get(ct.FIRMWARE_VERSION)])
 
     def _set(self, field: ct.Field, value: int) -> None:
         self.table[field.address : field.address + field.size] = field.encode(value)
@@ -202,8 +205,13 @@ class BusStats:
 class EmulatedBus:
     """Servos on a pseudo-terminal, served by a thread (in `BusEmulator`'s own process)."""
 
-    def __init__(self, servos: Iterable[EmulatedXM430], baudrate: int = 1_000_000, wire_time: bool = False,
-                 motor_hz: float = 200.0) -> None:  # fmt: skip
+    def __init__(
+        self,
+        servos: Iterable[EmulatedXM430 | EmulatedBoard],
+        baudrate: int = 1_000_000,
+        wire_time: bool = False,
+        motor_hz: float = 200.0,
+    ) -> None:
         self.servos = {s.servo_id: s for s in servos}
         self.baudrate = baudrate
         self.wire_time = wire_time
@@ -247,6 +255,8 @@ class EmulatedBus:
                 return ct.Field(args[1], args[2]).decode(bytes(servo.table[args[1] : args[1] + args[2]]))
             elif kind == "position":
                 return servo.position_rad
+            elif kind == "sense":  # a sensor board's reading (see sensor_emulators)
+                servo.sense(*args[1:])
             else:
                 raise ValueError(f"unknown request {kind!r}")
         return None
@@ -291,9 +301,11 @@ class EmulatedBus:
         self.stats.replies += 1
         os.write(self._master, reply)
 
-    def _reply(self, servo: EmulatedXM430, error: int, params: bytes = b"", is_read: bool = False) -> list[bytes]:
+    def _reply(
+        self, servo: EmulatedXM430 | EmulatedBoard, error: int, params: bytes = b"", is_read: bool = False
+    ) -> list[bytes]:
         faults = servo.faults
-        level = servo.get(ct.STATUS_RETURN_LEVEL)
+        level = servo.status_return_level
         if faults.dead or (level == 0) or (level == 1 and not is_read):
             return []
         if faults.drop_replies > 0:
@@ -354,9 +366,8 @@ class EmulatedBus:
                 else [target] if target is not None else []  # fmt: skip
             out = []
             for servo in servos:
-                info = ct.MODEL_NUMBER.encode(servo.get(ct.MODEL_NUMBER)) + bytes([servo.get(ct.FIRMWARE_VERSION)])
                 if not servo.faults.dead:  # a ping is answered whatever the status return level
-                    out.append(status(servo.servo_id, servo.error_byte(0), info))
+                    out.append(status(servo.servo_id, servo.error_byte(0), servo.ping_info()))
             return out
         if instruction == Instruction.SYNC_READ and packet.packet_id == BROADCAST_ID and len(p) >= 4:
             address, length = p[0] | p[1] << 8, p[2] | p[3] << 8
@@ -366,6 +377,14 @@ class EmulatedBus:
                 if servo is not None:
                     error, data = servo.read(address, length)
                     out += self._reply(servo, error, data, is_read=True)
+            return out
+        if instruction == Instruction.BULK_READ and packet.packet_id == BROADCAST_ID and len(p) >= 5:
+            out = []  # each device asked answers in turn, with its own block
+            for i in range(0, len(p) - 4, 5):
+                device = self.servos.get(p[i])
+                if device is not None:
+                    error, data = device.read(p[i + 1] | p[i + 2] << 8, p[i + 3] | p[i + 4] << 8)
+                    out += self._reply(device, error, data, is_read=True)
             return out
         if instruction == Instruction.SYNC_WRITE and packet.packet_id == BROADCAST_ID and len(p) >= 4:
             address, length = p[0] | p[1] << 8, p[2] | p[3] << 8
@@ -392,10 +411,18 @@ class BusEmulator:
     in its interpreter can delay a reply (in one process, the SDK's busy-waiting read held the interpreter lock
     past its 4 ms timeout). Use as a context manager; `port_name` is the pseudo-terminal the SDK opens."""
 
-    def __init__(self, servo_ids: Iterable[int], baudrate: int = 1_000_000, wire_time: bool = False,
-                 positions: dict[int, float] | None = None) -> None:  # fmt: skip
-        """`positions`: servo angles (rad from the centre) where servos start, by ID (0 for the others)."""
+    def __init__(
+        self,
+        servo_ids: Iterable[int],
+        baudrate: int = 1_000_000,
+        wire_time: bool = False,
+        positions: dict[int, float] | None = None,
+        sensors: bool = False,
+    ) -> None:
+        """`positions`: servo angles (rad from the centre) where servos start, by ID (0 for the others);
+        `sensors`: the OP3's OpenCR (ID 200) and FSR foot modules (111, 112) on the bus too."""
         self.servo_ids = tuple(servo_ids)
+        self.sensors = sensors
         self.positions = dict(positions or {})
         self.baudrate = baudrate
         self.wire_time = wire_time
@@ -414,7 +441,7 @@ class BusEmulator:
     def start(self) -> None:
         context = mp.get_context("spawn")
         parent, child = context.Pipe()
-        args = (child, self.servo_ids, self.baudrate, self.wire_time, self.positions)
+        args = (child, self.servo_ids, self.baudrate, self.wire_time, self.positions, self.sensors)
         self._process = context.Process(target=_serve, args=args, name="dynamixel-emulator", daemon=True)
         self._process.start()
         child.close()
@@ -469,14 +496,29 @@ class BusEmulator:
     def stats(self) -> BusStats:
         return self._call("stats")
 
+    def sense_imu(self, quat: Any, gyro: Any, accel: Any, device_id: int = 200) -> None:
+        """What the OpenCR's IMU reads now: trunk orientation (wxyz), rad/s, m/s^2 (trunk frame)."""
+        self._call("sense", device_id, list(quat), list(gyro), list(accel))
 
-def _serve(conn: Connection, servo_ids: tuple[int, ...], baudrate: int, wire_time: bool,
-           positions: dict[int, float]) -> None:  # fmt: skip
+    def sense_foot(self, device_id: int, forces_n: Any) -> None:
+        """What an FSR module's four pads read now (N)."""
+        self._call("sense", device_id, list(forces_n))
+
+
+def _serve(
+    conn: Connection,
+    servo_ids: tuple[int, ...],
+    baudrate: int,
+    wire_time: bool,
+    positions: dict[int, float],
+    sensors: bool,
+) -> None:
     # Real servos answer whatever the host is doing: where it may (root, or CAP_SYS_NICE), the emulator runs
     # ahead of ordinary processes. It sleeps in select() between packets, so it takes nothing from them.
     with contextlib.suppress(OSError, AttributeError):
         os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(EMULATOR_FIFO_PRIORITY))
-    bus = EmulatedBus([EmulatedXM430(i, positions.get(i, 0.0)) for i in servo_ids], baudrate, wire_time)
+    devices: list[EmulatedXM430 | EmulatedBoard] = [EmulatedXM430(i, positions.get(i, 0.0)) for i in servo_ids]
+    bus = EmulatedBus(devices + (op3_sensor_boards() if sensors else []), baudrate, wire_time)
     bus.start()
     conn.send(bus.port_name)
     try:

@@ -10,6 +10,12 @@ grippers 21-24); `humanoid hardware calibrate` records the zero offsets into the
     fast_sync_read = true     # one reply packet for all servos (firmware 45+); false: a reply from each servo
     bus_watchdog_ms = 500     # a servo that hears nothing this long stops where it is (0: off)
 
+    [sensors]                 # each may be "none" (see docs/real-robot-sensors.md)
+    imu = "opencr"            # the OpenCR at ID 200 on the servo bus, or "bno055:/dev/ttyUSB1" (its UART)
+    feet = "fsr"              # the FSR foot modules at IDs 111 (right) and 112 (left) on the servo bus
+    camera = "0"              # an OpenCV device index, a path or stream URL, or "realsense"
+    lidar = "ld06:/dev/ttyUSB2"   # an LDRobot LD06 or LD19 on its serial port
+
     [joints.r_knee]
     id = 13
     direction = -1            # +1 when the servo turns the joint's positive way
@@ -84,6 +90,10 @@ class HardwareConfig:
     # taken for a lost host; in position mode a silent host's servos hold their last goal meanwhile.
     bus_watchdog_ms: int = 500
     joints: tuple[JointServo, ...] = field(default_factory=tuple)
+    imu: str = "none"  # "opencr", "bno055:<serial port>" or "none"
+    feet: str = "none"  # "fsr" or "none"
+    camera: str = "none"  # a device index, path or URL for OpenCV, "realsense", or "none"
+    lidar: str = "none"  # "ld06:<serial port>", "ld19:<serial port>" or "none"
 
     def __post_init__(self) -> None:
         ids = [j.servo_id for j in self.joints]
@@ -97,6 +107,12 @@ class HardwareConfig:
                 f"bus_watchdog_ms {self.bus_watchdog_ms} must be 0 (off) or from three control periods "
                 f"({3 * period_ms:.0f} ms) to {127 * ct.BUS_WATCHDOG_UNIT_MS} ms"
             )
+        if self.imu != "none" and self.imu != "opencr" and not self.imu.startswith("bno055:"):
+            raise ConfigError(f"imu {self.imu!r}: use opencr, bno055:<serial port> or none")
+        if self.feet not in ("fsr", "none"):
+            raise ConfigError(f"feet {self.feet!r}: use fsr or none")
+        if self.lidar != "none" and self.lidar.split(":", 1)[0] not in ("ld06", "ld19"):
+            raise ConfigError(f"lidar {self.lidar!r}: use ld06:<serial port>, ld19:<serial port> or none")
         for j in self.joints:
             if not 0 <= j.servo_id <= 252:
                 raise ConfigError(f"{j.joint}: servo ID {j.servo_id} is outside 0-252")
@@ -149,21 +165,45 @@ def load_config(path: str | Path) -> HardwareConfig:
     if missing:
         raise ConfigError(f"{path} has no servo for: {', '.join(missing)}")
     order = {n: i for i, n in enumerate(humanoid_v1.JOINT_NAMES)}
-    return HardwareConfig(port=str(bus.get("port", "/dev/ttyUSB0")), baudrate=int(bus.get("baudrate", 2_000_000)),
-                          latency_timer_ms=float(bus.get("latency_timer_ms", 1.0)),
-                          control_hz=float(bus.get("control_hz", 100.0)),
-                          reply_margin_ms=float(bus.get("reply_margin_ms", 2.0)),
-                          fast_sync_read=bool(bus.get("fast_sync_read", True)),
-                          bus_watchdog_ms=int(bus.get("bus_watchdog_ms", 500)),
-                          joints=tuple(sorted(joints, key=lambda j: order[j.joint])))  # fmt: skip
+    return HardwareConfig(
+        port=str(bus.get("port", "/dev/ttyUSB0")),
+        baudrate=int(bus.get("baudrate", 2_000_000)),
+        latency_timer_ms=float(bus.get("latency_timer_ms", 1.0)),
+        control_hz=float(bus.get("control_hz", 100.0)),
+        reply_margin_ms=float(bus.get("reply_margin_ms", 2.0)),
+        fast_sync_read=bool(bus.get("fast_sync_read", True)),
+        bus_watchdog_ms=int(bus.get("bus_watchdog_ms", 500)),
+        joints=tuple(sorted(joints, key=lambda j: order[j.joint])),
+        **_sensor_entries(data.get("sensors", {})),
+    )
+
+
+def _sensor_entries(sensors: dict[str, object]) -> dict[str, str]:
+    unknown = set(sensors) - {"imu", "feet", "camera", "lidar"}
+    if unknown:
+        raise ConfigError(f"unknown [sensors] entries: {', '.join(sorted(unknown))} (imu, feet, camera, lidar)")
+    return {key: str(value) for key, value in sensors.items()}
 
 
 def dump_config(config: HardwareConfig) -> str:
-    lines = ["# humanoid_v1 on Dynamixel XM430-W350 servos (see robot/hardware/config.py)", "", "[bus]",
-             f'port = "{config.port}"', f"baudrate = {config.baudrate}",
-             f"latency_timer_ms = {config.latency_timer_ms!r}", f"control_hz = {config.control_hz!r}",
-             f"reply_margin_ms = {config.reply_margin_ms!r}", f"fast_sync_read = {str(config.fast_sync_read).lower()}",
-             f"bus_watchdog_ms = {config.bus_watchdog_ms}"]  # fmt: skip
+    lines = [
+        "# humanoid_v1 on Dynamixel XM430-W350 servos (see robot/hardware/config.py)",
+        "",
+        "[bus]",
+        f'port = "{config.port}"',
+        f"baudrate = {config.baudrate}",
+        f"latency_timer_ms = {config.latency_timer_ms!r}",
+        f"control_hz = {config.control_hz!r}",
+        f"reply_margin_ms = {config.reply_margin_ms!r}",
+        f"fast_sync_read = {str(config.fast_sync_read).lower()}",
+        f"bus_watchdog_ms = {config.bus_watchdog_ms}",
+        "",
+        "[sensors]",
+        f'imu = "{config.imu}"',
+        f'feet = "{config.feet}"',
+        f'camera = "{config.camera}"',
+        f'lidar = "{config.lidar}"',
+    ]
     for j in config.joints:
         lines += ["", f"[joints.{j.joint}]", f"id = {j.servo_id}", f"direction = {j.direction}",
                   f"offset_rad = {j.offset_rad!r}", f"scale = {j.scale!r}", f"min = {j.lower!r}",

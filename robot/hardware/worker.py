@@ -4,13 +4,22 @@ refuses."""
 
 from __future__ import annotations
 
+import time
+from collections.abc import Callable
+
 from robot.bodies.hardware import DEADMAN_S, ESTOP_TORQUE_OFF_AFTER_S, NOT_ON_HARDWARE, HardwareBody
+from robot.bodies.hardware_senses import HardwareSenses, ImuDriver
 from robot.config import RobotConfig
+from robot.control.locomotion import LocomotionController
 from robot.diagnostics.thresholds import Thresholds
 from robot.hardware.bus import DynamixelBus
+from robot.hardware.bus_sensors import BusSensors
 from robot.hardware.config import HardwareConfig
 from robot.model.world import WorldLayout
 from robot.robot import Robot
+from robot.sensors.bno055 import Bno055Imu
+from robot.sensors.camera import UvcCamera
+from robot.sensors.ld06 import Ld06Lidar
 
 __all__ = ["DEADMAN_S", "ESTOP_TORQUE_OFF_AFTER_S", "NOT_ON_HARDWARE", "HardwareWorker"]
 
@@ -27,8 +36,27 @@ class HardwareWorker(Robot):
         disk_path: str = ".",
         estop_torque_off_s: float = ESTOP_TORQUE_OFF_AFTER_S,
         deadman_s: float = DEADMAN_S,
+        locomotion: LocomotionController | None = None,
+        imu: ImuDriver | None = None,
     ) -> None:
-        body = HardwareBody(config, layout, bus, estop_torque_off_s, deadman_s)
+        """`locomotion`: the legs' controller, for a robot with an IMU and foot sensors (None: postures only);
+        `imu`: an IMU driver to use instead of the one `config.imu` names (tests)."""
+        bus = bus or DynamixelBus(config)
+        started = time.monotonic()  # the body's clock, which its sensors stamp their readings with too
+
+        def clock() -> float:
+            return time.monotonic() - started
+
+        body = HardwareBody(
+            config,
+            layout,
+            bus,
+            estop_torque_off_s,
+            deadman_s,
+            sensing=build_senses(config, bus, layout.robot_start, clock, imu),
+            walking_enabled=locomotion is not None,
+            started_at=started,
+        )
         robot = RobotConfig(
             realtime=True,
             control_hz=config.control_hz,
@@ -36,6 +64,32 @@ class HardwareWorker(Robot):
             diagnostics=diagnostics or Thresholds(),
             disk_path=disk_path,
         )
-        super().__init__(body, layout, robot)
+        super().__init__(body, layout, robot, locomotion=locomotion)
         self.hardware = config
         self.bus = body.bus
+
+
+def build_senses(
+    config: HardwareConfig,
+    bus: DynamixelBus,
+    start: tuple[float, ...],
+    clock: Callable[[], float],
+    imu: ImuDriver | None = None,
+) -> HardwareSenses:
+    """The senses `config` names: the IMU and feet (boards on the servo bus, or a BNO055 on its own serial port),
+    the camera and the lidar; `clock`: the body's, to stamp their readings."""
+    if imu is None and config.imu.startswith("bno055:"):
+        imu = Bno055Imu(config.imu.split(":", 1)[1], clock)
+    boards = BusSensors(bus.port, bus.packets, imu=config.imu == "opencr", feet=config.feet == "fsr", clock=clock)
+    camera = lidar = None
+    if config.camera == "realsense":
+        from robot.sensors.realsense import RealSenseCamera  # the optional extra: imported only when asked for
+
+        camera = RealSenseCamera(clock=clock)
+    elif config.camera != "none":
+        camera = UvcCamera(config.camera, clock)
+    if config.lidar != "none":
+        model, port = config.lidar.split(":", 1)
+        lidar = Ld06Lidar(port, clock, model=model.upper())
+    yaw = float(start[2]) if len(start) > 2 else 0.0
+    return HardwareSenses(boards, imu, yaw, clock, camera, lidar)

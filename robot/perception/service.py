@@ -64,9 +64,19 @@ class _Rate:
 
 
 class PerceptionService:
-    def __init__(self, layout: WorldLayout, latest_state: Callable[[], RobotState],
-                 publish: Callable[..., object], hz: float = SENSOR_HZ) -> None:  # fmt: skip
+    """`sensors`: makes what senses (default: the simulated suite in its own process; on the real robot, its
+    drivers), called on the service's thread."""
+
+    def __init__(
+        self,
+        layout: WorldLayout,
+        latest_state: Callable[[], RobotState],
+        publish: Callable[..., object],
+        hz: float = SENSOR_HZ,
+        sensors: Callable[[], SensorRunner] | None = None,
+    ) -> None:
         self.layout = layout
+        self._sensors = sensors or (lambda: ProcessSensors(layout))
         self.memory = WorldMemory(layout)
         self._latest_state = latest_state
         self._publish = publish
@@ -162,7 +172,7 @@ class PerceptionService:
         try:
             # its own process in headless runs too: on two cores, sensing then runs beside the control loop instead
             # of taking turns with it for the interpreter lock (a headless pick's wall/sim time: 0.87 -> 0.68)
-            runner: SensorRunner = ProcessSensors(self.layout)
+            runner: SensorRunner = self._sensors()
         except Exception as exc:
             self._fail(f"the sensors could not start: {exc}")
             return

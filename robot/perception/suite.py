@@ -21,9 +21,10 @@ from robot.model.world import WorldLayout
 from robot.perception.camera import SimRGBDCamera
 from robot.perception.detector import Detection, ObjectDetector, catalogue
 from robot.perception.geometry import invert, quat_wxyz_to_matrix, transform, yaw_of
-from robot.perception.lidar import LaserScan, SimLidar
-from robot.perception.localisation import Correction, ScanMatcher
-from robot.perception.occupancy import GridSpec, OccupancyGrid, OccupancyMapper
+from robot.perception.lidar import SimLidar
+from robot.perception.localisation import Correction
+from robot.perception.occupancy import GridSpec, OccupancyGrid
+from robot.perception.scan_mapping import ScanFrame, ScanMapping
 
 JPEG_QUALITY = 80
 MAP_SIZE_M = (8.0, 8.0)  # a map larger than the apartment, centred where the robot starts
@@ -56,13 +57,6 @@ class CameraFrame:
 
 
 @dataclass(frozen=True)
-class ScanFrame:
-    scan: LaserScan
-    pose: tuple[float, float, float]  # the sensor pose (x, y, yaw) the scan was mapped from: odometry, corrected
-    odom_pose: tuple[float, float, float]  # the same by odometry alone
-
-
-@dataclass(frozen=True)
 class SensorOutput:
     camera: CameraFrame | None = None
     scan: ScanFrame | None = None
@@ -82,8 +76,9 @@ class SensorSuite:
         self.lidar = SimLidar(self.model, seed=layout.seed)
         self.detector = ObjectDetector(catalogue(layout), self.camera.depth_noise_per_m2)
         x, y, _ = layout.robot_start
-        self.mapper = OccupancyMapper(GridSpec.around(round(x, 1), round(y, 1), *MAP_SIZE_M))
-        self.matcher = ScanMatcher(self.mapper.spec)
+        self.mapping = ScanMapping(GridSpec.around(round(x, 1), round(y, 1), *MAP_SIZE_M))
+        self.mapper = self.mapping.mapper
+        self.matcher = self.mapping.matcher
         self._map_every = map_every
         self._seq = 0
 
@@ -107,10 +102,7 @@ class SensorSuite:
             mount = transform(data.site_xmat[self._lidar_site].reshape(3, 3), data.site_xpos[self._lidar_site])
             site = to_odom @ mount
             odom_pose = (float(site[0, 3]), float(site[1, 3]), yaw_of(site[:3, :3]))
-            correction = self.matcher.update(raw, odom_pose)
-            pose = correction.apply(*odom_pose)
-            self.mapper.integrate(raw, *pose)
-            scan = ScanFrame(raw, pose, odom_pose)
+            scan = self.mapping.add(raw, odom_pose)
             if self.mapper.scans % self._map_every == 1 or self._map_every == 1:
                 grid = self.mapper.snapshot()
             timings["lidar_map_ms"] = (time.perf_counter() - started) * 1e3

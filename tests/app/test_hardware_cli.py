@@ -47,3 +47,28 @@ def test_init_check_and_calibrate(robot_toml, capsys) -> None:
         capsys.readouterr()
         assert main(["hardware", "check"]) == 1
         assert "missing" in capsys.readouterr().out
+
+
+def test_check_finds_the_sensor_boards_and_reads_the_imu(robot_toml, capsys, monkeypatch) -> None:
+    import math
+
+    from robot.sensors.imu import quat_from_rpy
+
+    monkeypatch.setenv("HUMANOID_IMU", "opencr")
+    monkeypatch.setenv("HUMANOID_FEET", "fsr")
+    from app.settings import get_settings
+
+    get_settings.cache_clear()
+    with BusEmulator(IDS, baudrate=2_000_000, sensors=True) as emulator:
+        assert main(["hardware", "init-config", "--port", emulator.port_name]) == 0
+        emulator.sense_imu(quat_from_rpy(math.radians(5), 0.0, 0.0), [0, 0, 0], [0, 0.85, 9.77])
+        emulator.sense_foot(112, [4.0, 4.0, 4.0, 4.0])
+        capsys.readouterr()
+        assert main(["hardware", "check", "--json"]) == 0
+        report = json.loads(capsys.readouterr().out)
+        assert [b["found"] for b in report["sensor_boards"]] == [True, True, True]
+        assert report["imu_tilt_deg"] == pytest.approx(5.0, abs=0.2)
+        assert report["foot_forces_n"][0] == [4.0, 4.0, 4.0, 4.0]
+        emulator.set_fault(111, dead=True)
+        assert main(["hardware", "check"]) == 1
+        assert "right foot FSR   missing" in capsys.readouterr().out
