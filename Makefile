@@ -14,7 +14,7 @@ export HOST PORT
 export NO_MKDOCS_2_WARNING := 1
 
 RUN_DEBS := libgl1 libegl1 libportaudio2 espeak-ng
-TEST_DEBS := $(RUN_DEBS) chromium postgresql systemd iproute2 ethtool
+TEST_DEBS := $(RUN_DEBS) chromium postgresql systemd iproute2 ethtool libusb-1.0-0
 
 .PHONY: run test lint docs bench setup setup-test venv deps-run deps-test clean
 
