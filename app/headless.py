@@ -28,13 +28,24 @@ def run_command(
     `text` came from and its recording (WAV), kept with the session."""
     upgrade_to_head(settings.database_url)
     engine = make_engine(settings.database_url)
-    worker = RobotWorker(generate_world(seed), realtime=False, control_hz=settings.control_hz,
-                         planning=settings.planner_config(), max_auto_replans=settings.max_auto_replans)  # fmt: skip
+    worker = RobotWorker(
+        generate_world(seed),
+        realtime=False,
+        control_hz=settings.control_hz,
+        planning=settings.planner_config(),
+        max_auto_replans=settings.max_auto_replans,
+    )
     factory = make_session_factory(engine)
     close_interrupted_sessions(factory)
-    recorder = SessionRecorder(factory, worker, kind="run", seed=seed, audio_dir=settings.audio_dir,
-                               camera_hz=settings.record_camera_hz,
-                               camera_width=settings.record_camera_width)  # fmt: skip
+    recorder = SessionRecorder(
+        factory,
+        worker,
+        kind="run",
+        seed=seed,
+        audio_dir=settings.audio_dir,
+        camera_hz=settings.record_camera_hz,
+        camera_width=settings.record_camera_width,
+    )
     started = time.perf_counter()
     worker.start()
     try:

@@ -98,14 +98,27 @@ class GaitOverlay:
         size = (humanoid_v1.FOOT_LENGTH, humanoid_v1.FOOT_WIDTH, 0.004)
         self._steps = [self._footstep(scene, i, size) for i in range(MAX_FOOTSTEPS)]
         self._com = scene.add_icosphere("/gait/com", radius=0.02, color=COM_COLOUR, cast_shadow=False, visible=False)
-        self._zmp = scene.add_box("/gait/zmp", color=ZMP_COLOUR, dimensions=(0.025, 0.025, 0.004), cast_shadow=False,
-                                  receive_shadow=False, visible=False)  # fmt: skip
+        self._zmp = scene.add_box(
+            "/gait/zmp",
+            color=ZMP_COLOUR,
+            dimensions=(0.025, 0.025, 0.004),
+            cast_shadow=False,
+            receive_shadow=False,
+            visible=False,
+        )
         self.shown = False
 
     @staticmethod
     def _footstep(scene: viser.SceneApi, index: int, size: tuple[float, float, float]) -> viser.BoxHandle:
-        return scene.add_box(f"/gait/footstep_{index}", color=FOOTSTEP_COLOURS["left"], dimensions=size,
-                             opacity=0.55, cast_shadow=False, receive_shadow=False, visible=False)  # fmt: skip
+        return scene.add_box(
+            f"/gait/footstep_{index}",
+            color=FOOTSTEP_COLOURS["left"],
+            dimensions=size,
+            opacity=0.55,
+            cast_shadow=False,
+            receive_shadow=False,
+            visible=False,
+        )
 
     def update(self, loco: LocomotionState | None) -> None:
         if loco is None or loco.com is None:
@@ -152,8 +165,9 @@ class SceneMirror:
         self.server.scene.configure_default_lights(enabled=True, cast_shadow=shadows and profile.floor_grid)
         if not profile.image_based_lighting:
             self.server.scene.configure_environment_map(hdri=None, environment_intensity=0.0)
-            self.server.scene.add_light_hemisphere("/hemisphere", sky_color=(255, 255, 255),
-                                                   ground_color=(120, 110, 100), intensity=1.6)  # fmt: skip
+            self.server.scene.add_light_hemisphere(
+                "/hemisphere", sky_color=(255, 255, 255), ground_color=(120, 110, 100), intensity=1.6
+            )
         self.gait = GaitOverlay(self.server)
         self.perception = PerceptionOverlay(self.server)
         self.navigation = NavigationOverlay(self.server)
@@ -190,8 +204,11 @@ class SceneMirror:
         perceived |= self.navigation.update(state.navigation)
         qpos = np.asarray(state.qpos)
         scene = np.concatenate([qpos, np.asarray(state.mocap_positions, dtype=float)])  # dropped obstacles too
-        if (self._last_qpos is not None and scene.shape == self._last_qpos.shape
-                and np.max(np.abs(scene - self._last_qpos)) < VISIBLE_CHANGE):  # fmt: skip
+        if (
+            self._last_qpos is not None
+            and scene.shape == self._last_qpos.shape
+            and np.max(np.abs(scene - self._last_qpos)) < VISIBLE_CHANGE
+        ):
             if self.gait.shown and (state.locomotion is None or state.locomotion.com is None):
                 self.gait.update(None)  # the walk ended while the robot stood still: clear its overlay
                 perceived = True

@@ -76,8 +76,9 @@ class MirrorProcess:
     def start(self) -> None:
         context = mp.get_context("spawn")
         parent_conn, child_conn = context.Pipe(duplex=True)
-        self._process = context.Process(target=mirror_main, args=(child_conn, *self._args), name="scene-mirrors",
-                                        daemon=True)  # fmt: skip
+        self._process = context.Process(
+            target=mirror_main, args=(child_conn, *self._args), name="scene-mirrors", daemon=True
+        )
         self._process.start()
         child_conn.close()
         self._conn = parent_conn

@@ -79,8 +79,9 @@ class PerceptionOverlay:
         r = ranges[hit]
         points = np.stack([x + r * np.cos(angles), y + r * np.sin(angles), np.full(r.shape, scan.height_m)], axis=-1)
         if self._scan is None:
-            self._scan = self._scene.add_point_cloud("/perception/scan", points.astype(np.float32), SCAN_COLOUR,
-                                                     point_size=0.02, point_shape="circle")  # fmt: skip
+            self._scan = self._scene.add_point_cloud(
+                "/perception/scan", points.astype(np.float32), SCAN_COLOUR, point_size=0.02, point_shape="circle"
+            )
         else:
             self._scan.points = points.astype(np.float32)
             self._scan.colors = np.tile(np.array(SCAN_COLOUR, dtype=np.uint8), (len(points), 1))
@@ -91,8 +92,16 @@ class PerceptionOverlay:
         centre = (grid.origin[0] + width / 2, grid.origin[1] + height / 2, MAP_Z)
         if self._map is not None:
             self._map.remove()
-        self._map = self._scene.add_image("/perception/map", map_rgba(grid), width, height, format="png",
-                                          position=centre, cast_shadow=False, receive_shadow=False)  # fmt: skip
+        self._map = self._scene.add_image(
+            "/perception/map",
+            map_rgba(grid),
+            width,
+            height,
+            format="png",
+            position=centre,
+            cast_shadow=False,
+            receive_shadow=False,
+        )
         self._map_drawn = grid.data
 
     def _draw_objects(self, known: tuple[KnownObject, ...]) -> bool:
@@ -105,11 +114,18 @@ class PerceptionOverlay:
             text = f"{obj.name} (seen)"
             if drawn is None:
                 key = obj.name.replace(" ", "_")
-                box = self._scene.add_box(f"/perception/objects/{key}", OBJECT_COLOUR, (0.05, 0.05, 0.005),
-                                          position=(x, y, z + 0.001), opacity=0.8, cast_shadow=False,
-                                          receive_shadow=False)  # fmt: skip
-                label = self._scene.add_label(f"/perception/objects/{key}_label", text, position=(x, y, z + 0.12),
-                                              anchor="bottom-center")  # fmt: skip
+                box = self._scene.add_box(
+                    f"/perception/objects/{key}",
+                    OBJECT_COLOUR,
+                    (0.05, 0.05, 0.005),
+                    position=(x, y, z + 0.001),
+                    opacity=0.8,
+                    cast_shadow=False,
+                    receive_shadow=False,
+                )
+                label = self._scene.add_label(
+                    f"/perception/objects/{key}_label", text, position=(x, y, z + 0.12), anchor="bottom-center"
+                )
             else:
                 box, label, _ = drawn
                 box.position = (x, y, z + 0.001)
@@ -130,8 +146,9 @@ class NavigationOverlay:
     def __init__(self, server: viser.ViserServer) -> None:
         self._scene = server.scene
         self._path: viser.LineSegmentsHandle | None = None
-        self._goal = self._scene.add_box("/navigation/goal", GOAL_COLOUR, (0.12, 0.03, 0.01), cast_shadow=False,
-                                         receive_shadow=False, visible=False)  # fmt: skip
+        self._goal = self._scene.add_box(
+            "/navigation/goal", GOAL_COLOUR, (0.12, 0.03, 0.01), cast_shadow=False, receive_shadow=False, visible=False
+        )
         self._drawn: NavigationState | None = None
 
     def update(self, navigation: NavigationState | None) -> bool:
@@ -147,8 +164,9 @@ class NavigationOverlay:
         points = np.array([(x, y, PATH_Z) for x, y in navigation.path], dtype=np.float32)
         if len(points) >= 2:
             segments = np.stack([points[:-1], points[1:]], axis=1)
-            self._path = self._scene.add_line_segments("/navigation/path", segments, PATH_COLOUR, thickness=4.0,
-                                                       thickness_units="screen")  # fmt: skip
+            self._path = self._scene.add_line_segments(
+                "/navigation/path", segments, PATH_COLOUR, thickness=4.0, thickness_units="screen"
+            )
         x, y, heading = navigation.goal
         self._goal.position = (x + 0.06 * math.cos(heading), y + 0.06 * math.sin(heading), PATH_Z)
         self._goal.wxyz = (math.cos(heading / 2), 0.0, 0.0, math.sin(heading / 2))

@@ -85,8 +85,9 @@ class ReplayTrack:
         s = self.slices.get(name)
         return None if s is None else self.rows[index, s]
 
-    def window(self, name: str, t0: float, t1: float, column: int = 0,
-               max_points: int = 600) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    def window(
+        self, name: str, t0: float, t1: float, column: int = 0, max_points: int = 600
+    ) -> tuple[np.ndarray, np.ndarray]:
         s = self.slices.get(name)
         i0, i1 = np.searchsorted(self.times, [t0, t1])
         if s is None or i1 <= i0:
@@ -174,11 +175,16 @@ class SessionReplay:
         with self._lock:
             track = self._track
             return ReplayStatus(
-                session_id=self._session_id, sim_time_s=round(self._t, 3),
-                start_s=track.start if track else 0.0, end_s=track.end if track else 0.0, playing=self._playing,
-                speed=self._speed, samples=len(track.rows) if track else 0, now=self._now_text(),
+                session_id=self._session_id,
+                sim_time_s=round(self._t, 3),
+                start_s=track.start if track else 0.0,
+                end_s=track.end if track else 0.0,
+                playing=self._playing,
+                speed=self._speed,
+                samples=len(track.rows) if track else 0,
+                now=self._now_text(),
                 frames=self.frames,
-            )  # fmt: skip
+            )
 
     # ----------------------------------------------------------------------------------------------------------
 
@@ -259,8 +265,9 @@ class SessionReplay:
         self._speed_in = gui.add_dropdown("Speed", options=SPEEDS, initial_value="1")
         self._now = gui.add_markdown("")
         self._joint = gui.add_dropdown("Joint", options=["(none recorded)"])
-        self._plot_joint = self._add_plot("joint target vs position (rad)", (("target", "#d04040"),
-                                                                             ("position", "#3060d0")))  # fmt: skip
+        self._plot_joint = self._add_plot(
+            "joint target vs position (rad)", (("target", "#d04040"), ("position", "#3060d0"))
+        )
         self._plot_com = self._add_plot("centre of mass (m)", (("x", "#d04040"), ("y", "#30a030"), ("z", "#3060d0")))
         self._plot_battery = self._add_plot("battery voltage (V)", (("battery V", "#c08000"),))
         self._plot_tick = self._add_plot("control tick (ms)", (("tick ms", "#606060"),))
@@ -290,10 +297,13 @@ class SessionReplay:
 
     def _add_plot(self, title: str, lines: tuple[tuple[str, str], ...]) -> viser.GuiUplotHandle:
         empty = np.zeros(1)
-        series = (uplot.Series(label="t (s)"), *(uplot.Series(label=label, stroke=colour, width=1.5)
-                                                 for label, colour in lines))  # fmt: skip
-        return self.server.gui.add_uplot(data=(empty,) * (len(lines) + 1), series=series, title=title, aspect=2.0,
-                                         scales=SECONDS)  # fmt: skip
+        series = (
+            uplot.Series(label="t (s)"),
+            *(uplot.Series(label=label, stroke=colour, width=1.5) for label, colour in lines),
+        )
+        return self.server.gui.add_uplot(
+            data=(empty,) * (len(lines) + 1), series=series, title=title, aspect=2.0, scales=SECONDS
+        )
 
     def _sync_gui(self) -> None:
         """Show the replay's state in its own controls (without the slider's update seeking again)."""

@@ -138,8 +138,9 @@ class WorkerSupervisor:
             self._worker.restart()
         except Exception as exc:  # it could not even start: counted, and tried again after the next backoff
             log.exception("the robot process could not be restarted")
-            self._worker.announce("worker/restart_failed", f"the robot process could not be restarted: {exc}",
-                                  Level.ERROR)  # fmt: skip
+            self._worker.announce(
+                "worker/restart_failed", f"the robot process could not be restarted: {exc}", Level.ERROR
+            )
             return
         self.restarts += 1
         self._worker.submit(EStop(source="supervisor", reason=f"the robot process was restarted after it {died}"))

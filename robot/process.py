@@ -88,8 +88,23 @@ PROGRESS_CPU_S = 0.02  # used in PROGRESS_WINDOW_S: its control loop alone uses 
 PROGRESS_WINDOW_S = 0.3
 BUSY_SILENCE_S = 15.0
 # Commands that must never queue behind a slow one: handled inline by the child's receiving thread.
-_IMMEDIATE = (EStop, ReleaseEStop, CancelPlan, Teleop, StopTeleop, SetPosture, ResetRobot, PlaceObstacle, PausePlan,
-              ApprovePlan, ResumePlan, SetApproval, InjectFault, SetTorque, OperatorHeartbeat)  # fmt: skip
+_IMMEDIATE = (
+    EStop,
+    ReleaseEStop,
+    CancelPlan,
+    Teleop,
+    StopTeleop,
+    SetPosture,
+    ResetRobot,
+    PlaceObstacle,
+    PausePlan,
+    ApprovePlan,
+    ResumePlan,
+    SetApproval,
+    InjectFault,
+    SetTorque,
+    OperatorHeartbeat,
+)
 
 
 # stopped (SIGSTOP, a debugger), or gone while its pipe is still open: no progress to wait for
@@ -419,8 +434,9 @@ class WorkerProcess:
 
 def merge_feed(current: SensorFeed, changed: SensorFeed) -> SensorFeed:
     """A feed message carries only the sensors that have something new."""
-    return SensorFeed(camera=changed.camera or current.camera, scan=changed.scan or current.scan,
-                      map=changed.map or current.map)  # fmt: skip
+    return SensorFeed(
+        camera=changed.camera or current.camera, scan=changed.scan or current.scan, map=changed.map or current.map
+    )
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -448,15 +464,28 @@ def child_main(
         if hardware is not None:
             from robot.hardware.worker import HardwareWorker
 
-            worker: Any = HardwareWorker(hardware.config, generate_world(seed), diagnostics=diagnostics,
-                                         disk_path=disk_path, deadman_s=hardware.deadman_s)  # fmt: skip
+            worker: Any = HardwareWorker(
+                hardware.config,
+                generate_world(seed),
+                diagnostics=diagnostics,
+                disk_path=disk_path,
+                deadman_s=hardware.deadman_s,
+            )
         else:
             from robot.worker import RobotWorker
 
-            worker = RobotWorker(generate_world(seed), realtime=realtime, control_hz=control_hz,
-                                 perception=perception, planning=planning, max_auto_replans=max_auto_replans,
-                                 approve_plans=approve_plans, voice=voice, diagnostics=diagnostics,
-                                 disk_path=disk_path)  # fmt: skip
+            worker = RobotWorker(
+                generate_world(seed),
+                realtime=realtime,
+                control_hz=control_hz,
+                perception=perception,
+                planning=planning,
+                max_auto_replans=max_auto_replans,
+                approve_plans=approve_plans,
+                voice=voice,
+                diagnostics=diagnostics,
+                disk_path=disk_path,
+            )
         subscription = worker.subscribe()
         if realtime:  # every thread started from here on inherits it; the control loop goes higher still
             raise_thread_priority(WORKER_FIFO_PRIORITY)

@@ -45,8 +45,9 @@ def make_worker(layout: WorldLayout, scene_model: mujoco.MjModel) -> Iterator:
         # A loaded test machine can pause an in-process worker's loop longer than the robot's watchdog allows (and
         # a safe stop would then refuse the test's commands): tests of the watchdog pass their own thresholds.
         kwargs.setdefault("diagnostics", Thresholds(control_stale_s=3.0))
-        worker = RobotWorker(layout, backend=MujocoSimBackend(layout, scene_model), realtime=realtime,
-                             perception=perception, **kwargs)  # fmt: skip
+        worker = RobotWorker(
+            layout, backend=MujocoSimBackend(layout, scene_model), realtime=realtime, perception=perception, **kwargs
+        )
         worker.start()
         workers.append(worker)
         return worker

@@ -143,11 +143,17 @@ def _frame_header(app_state: Any, rt: Runtime, frame: CameraImage) -> str:
     if cached is not None and cached[0] is frame:
         return cached[1]
     state = rt.worker.state().perception
-    text = json.dumps({
-        "type": "frame", "seq": frame.seq, "sim_time_s": frame.sim_time_s, "width": frame.width,
-        "height": frame.height, "camera_hz": state.camera_hz if state else 0.0,
-        "detections": [dataclasses.asdict(d) for d in frame.detections],
-    })  # fmt: skip
+    text = json.dumps(
+        {
+            "type": "frame",
+            "seq": frame.seq,
+            "sim_time_s": frame.sim_time_s,
+            "width": frame.width,
+            "height": frame.height,
+            "camera_hz": state.camera_hz if state else 0.0,
+            "detections": [dataclasses.asdict(d) for d in frame.detections],
+        }
+    )
     app_state.camera_header = (frame, text)
     return text
 

@@ -100,8 +100,13 @@ class TeleopIn(BaseModel):
     vy: float = Field(
         0.0, allow_inf_nan=False, ge=-TELEOP_MAX_SPEED_M_S, le=TELEOP_MAX_SPEED_M_S, description="to the left, m/s"
     )
-    yaw_rate: float = Field(0.0, allow_inf_nan=False, ge=-TELEOP_MAX_YAW_RATE, le=TELEOP_MAX_YAW_RATE,
-                            description="counter-clockwise, rad/s (beyond 3 rad/s refused)")  # fmt: skip
+    yaw_rate: float = Field(
+        0.0,
+        allow_inf_nan=False,
+        ge=-TELEOP_MAX_YAW_RATE,
+        le=TELEOP_MAX_YAW_RATE,
+        description="counter-clockwise, rad/s (beyond 3 rad/s refused)",
+    )
     source: str = Field("api", max_length=16, pattern=r"^[a-z_-]+$")
 
 

@@ -56,12 +56,18 @@ def get_sessions(
 ) -> dict[str, Any]:
     """Stored sessions, newest first, filtered and paged; `total` counts every match and `live_session_id`
     is the one being recorded."""
-    filters = SessionFilter(started_from=started_from, started_to=started_to, outcome=outcome, text=q or None,
-                            had_estop=had_estop, had_fall=had_fall, kind=kind)  # fmt: skip
+    filters = SessionFilter(
+        started_from=started_from,
+        started_to=started_to,
+        outcome=outcome,
+        text=q or None,
+        had_estop=had_estop,
+        had_fall=had_fall,
+        kind=kind,
+    )
     with rt.db() as db:
         items, total = list_sessions(db, filters, limit=limit, offset=offset)
-    return {"items": items, "total": total, "limit": limit, "offset": offset,
-            "live_session_id": rt.recorder.session_id}  # fmt: skip
+    return {"items": items, "total": total, "limit": limit, "offset": offset, "live_session_id": rt.recorder.session_id}
 
 
 @router.get("/sessions/{session_id}")
@@ -135,8 +141,9 @@ def get_recording(session_id: int, transcript_id: int, rt: RuntimeDep) -> FileRe
 
 
 @router.get("/sessions/{session_id}/export")
-async def export_session(session_id: int, rt: RuntimeDep, background: BackgroundTasks,
-                         format: Literal["json", "mcap"] = "json") -> FileResponse:  # fmt: skip
+async def export_session(
+    session_id: int, rt: RuntimeDep, background: BackgroundTasks, format: Literal["json", "mcap"] = "json"
+) -> FileResponse:
     """The session as one JSON document (importable again) or as MCAP with Foxglove schemas (Foxglove, Lichtblick)."""
     await run_in_threadpool(_exists, rt, session_id)
     descriptor, name = tempfile.mkstemp(prefix=f"session-{session_id}-", suffix=f".{format}")

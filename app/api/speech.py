@@ -119,8 +119,14 @@ async def _latch(rt: Runtime) -> str:
 
 def _unheard(audio_s: float, engine: str) -> dict[str, Any]:
     """A recording the recogniser failed on: kept in the session with an empty transcript."""
-    return {"text": "", "confidence": 0.0, "in_grammar": False, "engine": engine, "audio_s": round(audio_s, 3),
-            "decode_ms": 0.0}  # fmt: skip
+    return {
+        "text": "",
+        "confidence": 0.0,
+        "in_grammar": False,
+        "engine": engine,
+        "audio_s": round(audio_s, 3),
+        "decode_ms": 0.0,
+    }
 
 
 @router.get("/say.wav")

@@ -81,8 +81,10 @@ class AccessControl:
     def check_exposure(self) -> None:
         """Refuse to serve beyond this computer without access control (anyone on the network could drive)."""
         if self.mode == "on" and self.store.count() == 0:
-            raise InsecureBind("access control is on (HUMANOID_AUTH=on) but there are no users: add one with "
-                               "`humanoid users add NAME --role operator`")  # fmt: skip
+            raise InsecureBind(
+                "access control is on (HUMANOID_AUTH=on) but there are no users: add one with "
+                "`humanoid users add NAME --role operator`"
+            )
         if not is_loopback(self.host) and not self.enabled:
             raise InsecureBind(
                 f"refusing to serve on {self.host} without access control: anyone who can reach it could move the "

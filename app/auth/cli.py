@@ -51,16 +51,31 @@ def _run(args: argparse.Namespace, settings: Settings) -> int:
             print(f"removed {args.name} and their tokens")
         elif args.users_command == "token":
             token = store.issue_token(args.name, args.label)
-            print(token if args.quiet else f"token for {args.name} (shown once; send it as "
-                                           f"'Authorization: Bearer <token>'):\n{token}")  # fmt: skip
+            print(
+                token
+                if args.quiet
+                else f"token for {args.name} (shown once; send it as 'Authorization: Bearer <token>'):\n{token}"
+            )
         elif args.users_command == "revoke-tokens":
             print(f"revoked {store.revoke_tokens(args.name)} tokens of {args.name}")
         else:  # list
             users = store.list()
             if args.json:
-                print(json.dumps([{"name": u.name, "role": u.role.value, "password": u.has_password,
-                                   "tokens": u.tokens, "created_at": u.created_at.isoformat()} for u in users],
-                                 indent=2))  # fmt: skip
+                print(
+                    json.dumps(
+                        [
+                            {
+                                "name": u.name,
+                                "role": u.role.value,
+                                "password": u.has_password,
+                                "tokens": u.tokens,
+                                "created_at": u.created_at.isoformat(),
+                            }
+                            for u in users
+                        ],
+                        indent=2,
+                    )
+                )
             else:
                 for u in users:
                     print(

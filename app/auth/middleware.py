@@ -51,9 +51,11 @@ class AccessMiddleware:
             await self._refuse(scope, receive, send, 403, "cross-origin request refused (see HUMANOID_ALLOWED_ORIGINS)")
             return
         access = self.access()
-        who = LOCAL_OPERATOR if access is None else access.identify(
-            _cookie(headers), headers.get(b"authorization", b"").decode("latin-1") or None
-        )  # fmt: skip
+        who = (
+            LOCAL_OPERATOR
+            if access is None
+            else access.identify(_cookie(headers), headers.get(b"authorization", b"").decode("latin-1") or None)
+        )
         scope.setdefault("state", {})["principal"] = who
         guarded = path.startswith(("/api/", "/ws")) or path == "/metrics"
         if who is None and path not in PUBLIC_PATHS:

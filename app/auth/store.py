@@ -44,8 +44,14 @@ class UserStore:
         with self.db() as s, s.begin():
             if s.scalar(select(UserRow).where(UserRow.name == name)) is not None:
                 raise UserError(f"user {name!r} exists")
-            s.add(UserRow(name=name, role=role.value, password_hash=hash_password(password) if password else None,
-                          created_at=datetime.now(UTC)))  # fmt: skip
+            s.add(
+                UserRow(
+                    name=name,
+                    role=role.value,
+                    password_hash=hash_password(password) if password else None,
+                    created_at=datetime.now(UTC),
+                )
+            )
 
     def set_password(self, name: str, password: str) -> None:
         with self.db() as s, s.begin():
@@ -62,8 +68,10 @@ class UserStore:
     def list(self) -> list[UserInfo]:
         with self.db() as s:
             counts = dict(s.execute(select(ApiTokenRow.user_id, func.count()).group_by(ApiTokenRow.user_id)).all())
-            return [UserInfo(u.name, Role(u.role), u.password_hash is not None, counts.get(u.id, 0), u.created_at)
-                    for u in s.scalars(select(UserRow).order_by(UserRow.name))]  # fmt: skip
+            return [
+                UserInfo(u.name, Role(u.role), u.password_hash is not None, counts.get(u.id, 0), u.created_at)
+                for u in s.scalars(select(UserRow).order_by(UserRow.name))
+            ]
 
     def check_password(self, name: str, password: str) -> Principal | None:
         with self.db() as s:
@@ -78,8 +86,9 @@ class UserStore:
         token = new_token()
         with self.db() as s, s.begin():
             user = self._user(s, name)
-            s.add(ApiTokenRow(user_id=user.id, digest=token_digest(token), label=label[:64],
-                              created_at=datetime.now(UTC)))  # fmt: skip
+            s.add(
+                ApiTokenRow(user_id=user.id, digest=token_digest(token), label=label[:64], created_at=datetime.now(UTC))
+            )
         return token
 
     def revoke_tokens(self, name: str) -> int:

@@ -31,8 +31,11 @@ def launch_chromium(playwright: Any, microphone_wav: str | None = None) -> Any:
     """Debian's Chromium, headless; with `microphone_wav`, a fake microphone that plays that file (in a loop)."""
     args = list(CHROMIUM_ARGS)
     if microphone_wav is not None:
-        args += ["--use-fake-ui-for-media-stream", "--use-fake-device-for-media-stream",
-                 f"--use-file-for-fake-audio-capture={microphone_wav}"]  # fmt: skip
+        args += [
+            "--use-fake-ui-for-media-stream",
+            "--use-fake-device-for-media-stream",
+            f"--use-file-for-fake-audio-capture={microphone_wav}",
+        ]
     return playwright.chromium.launch(executable_path=chromium_path(), args=args, headless=True)
 
 

@@ -30,8 +30,12 @@ def _thread_cpu_s(native_id: int) -> float:
 
 def _stats(values: list[float]) -> dict[str, float]:
     data = np.asarray(values, dtype=float)
-    return {"n": int(data.size), "p50": round(float(np.percentile(data, 50)), 3),
-            "p99": round(float(np.percentile(data, 99)), 3), "max": round(float(data.max()), 3)}  # fmt: skip
+    return {
+        "n": int(data.size),
+        "p50": round(float(np.percentile(data, 50)), 3),
+        "p99": round(float(np.percentile(data, 99)), 3),
+        "max": round(float(data.max()), 3),
+    }
 
 
 def _time_to_stop(worker: Any, inject: Any) -> float:
@@ -69,10 +73,15 @@ def run_diagnostics(duration_s: float = 60.0, seed: int = 0) -> dict[str, Any]:
 
     started = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="humanoid-bench-diag-") as tmp:
-        settings = Settings(database_url=f"sqlite:///{Path(tmp) / 'bench.db'}", enable_mirror=False, seed=seed,
-                            audio_dir=str(Path(tmp) / "audio"))  # fmt: skip
-        worker = RobotWorker(generate_world(seed), realtime=True, perception=True, diagnostics=settings.diagnostics,
-                             disk_path=tmp)  # fmt: skip
+        settings = Settings(
+            database_url=f"sqlite:///{Path(tmp) / 'bench.db'}",
+            enable_mirror=False,
+            seed=seed,
+            audio_dir=str(Path(tmp) / "audio"),
+        )
+        worker = RobotWorker(
+            generate_world(seed), realtime=True, perception=True, diagnostics=settings.diagnostics, disk_path=tmp
+        )
         runtime = Runtime.start(settings, worker=worker)
         try:
             monitor = worker.health.monitor  # the bench measures the thread itself

@@ -92,8 +92,9 @@ async def _viewer(base: str, mirror_url: str, stats: ViewerStats, stop: asyncio.
             websockets.connect(mirror_url, max_size=None, subprotocols=[f"viser-v{viser.__version__}"]) as mirror,
         ):
             stats.connected = True
-            await asyncio.gather(_count(robot, on_robot, stop), _count(camera, on_camera, stop),
-                                 _count(mirror, on_mirror, stop))  # fmt: skip
+            await asyncio.gather(
+                _count(robot, on_robot, stop), _count(camera, on_camera, stop), _count(mirror, on_mirror, stop)
+            )
     except Exception as exc:  # a viewer dropped is a result, not a crash of the bench
         stats.error = f"{type(exc).__name__}: {exc}"
     finally:
@@ -174,8 +175,9 @@ async def _operator(base: str, presses: int, stats: OperatorStats) -> None:
             reader.cancel()
 
 
-async def _load(base: str, mirror_ports: tuple[int, int], viewers: int, presses: int,
-                settle_s: float) -> tuple[list[ViewerStats], OperatorStats, float]:  # fmt: skip
+async def _load(
+    base: str, mirror_ports: tuple[int, int], viewers: int, presses: int, settle_s: float
+) -> tuple[list[ViewerStats], OperatorStats, float]:
     stop = asyncio.Event()
     watching = [ViewerStats() for _ in range(viewers)]
     token = httpx.get(base + "/api/scene", timeout=10).json()["token"]  # (the 3D views' gates admit a login)

@@ -33,12 +33,20 @@ IN_VIEW_RANGE_M = 1.5
 VISIBLE_SHARE = 0.7
 FALSE_LABEL_M = 0.05
 STUCK_S = 30.0  # a tour that makes no progress for this long (sim) is abandoned
-TARGETS = {"recall_min": 0.98, "false_labels": 0, "error_median_m": 0.015, "error_p95_m": 0.03, "rate_hz_min": 10.0,
-           "rtf_min": 1.0, "map_iou_min": 0.85}  # fmt: skip
+TARGETS = {
+    "recall_min": 0.98,
+    "false_labels": 0,
+    "error_median_m": 0.015,
+    "error_p95_m": 0.03,
+    "rate_hz_min": 10.0,
+    "rtf_min": 1.0,
+    "map_iou_min": 0.85,
+}
 
 
-def run_perception(seeds: int = 50, views: int = 6, seed: int = 0, realtime_s: float = 30.0, tours: int = 5,
-                   workers: int | None = None) -> dict[str, Any]:  # fmt: skip
+def run_perception(
+    seeds: int = 50, views: int = 6, seed: int = 0, realtime_s: float = 30.0, tours: int = 5, workers: int | None = None
+) -> dict[str, Any]:
     started = time.perf_counter()
     workers = workers or max(1, min(2, os.cpu_count() or 1))
     seed_list = list(range(seed, seed + seeds))
@@ -122,16 +130,23 @@ def detection_trial(seed: int, views: int) -> dict[str, Any]:
             error = float(np.linalg.norm(np.asarray(detection.position) - truth)) if detection else None
             if detection is not None and error is not None and error > FALSE_LABEL_M:
                 false_labels.append({"seed": seed, "label": obj.name, "error_m": round(error, 3)})
-            records.append({"object": obj.name, "in_view": in_view, "distance_m": round(distance_m, 3),
-                            "found": detection is not None, "error_m": error})  # fmt: skip
+            records.append(
+                {
+                    "object": obj.name,
+                    "in_view": in_view,
+                    "distance_m": round(distance_m, 3),
+                    "found": detection is not None,
+                    "error_m": error,
+                }
+            )
         done += 1
     suite.close()
-    return {"seed": seed, "views": done, "records": records, "false_labels": false_labels,
-            "frame_ms": out.timings_ms}  # fmt: skip
+    return {"seed": seed, "views": done, "records": records, "false_labels": false_labels, "frame_ms": out.timings_ms}
 
 
-def _in_view(model: Any, data: Any, suite: Any, camera: np.ndarray, obj: Any, base: np.ndarray,
-             body: int) -> tuple[bool, float]:  # fmt: skip
+def _in_view(
+    model: Any, data: Any, suite: Any, camera: np.ndarray, obj: Any, base: np.ndarray, body: int
+) -> tuple[bool, float]:
     """Wholly in the image, within range, and mostly unoccluded (rays to its camera-facing side)."""
     import mujoco
 
@@ -148,8 +163,12 @@ def _in_view(model: Any, data: Any, suite: Any, camera: np.ndarray, obj: Any, ba
         return False, distance
     pixels = intrinsics.project(local)
     margin = 3
-    inside = np.all((pixels[:, 0] >= margin) & (pixels[:, 0] <= intrinsics.width - 1 - margin)
-                    & (pixels[:, 1] >= margin) & (pixels[:, 1] <= intrinsics.height - 1 - margin))  # fmt: skip
+    inside = np.all(
+        (pixels[:, 0] >= margin)
+        & (pixels[:, 0] <= intrinsics.width - 1 - margin)
+        & (pixels[:, 1] >= margin)
+        & (pixels[:, 1] <= intrinsics.height - 1 - margin)
+    )
     if not inside or distance > IN_VIEW_RANGE_M:
         return False, distance
     towards = eye[:2] - base[:2]
@@ -248,8 +267,17 @@ def tour_route(layout: Any) -> list[tuple[float, float]]:
 
     places = {p.name: p for p in layout.places}
     door_west, door_east = (PARTITION_X - 0.35, 0.0), (PARTITION_X + 0.35, 0.0)
-    return [places["living-room table"].staging, places["charging dock"].staging, door_west, door_east,
-            places["kitchen counter"].staging, (1.0, -0.9), door_east, door_west, layout.robot_start[:2]]  # fmt: skip
+    return [
+        places["living-room table"].staging,
+        places["charging dock"].staging,
+        door_west,
+        door_east,
+        places["kitchen counter"].staging,
+        (1.0, -0.9),
+        door_east,
+        door_west,
+        layout.robot_start[:2],
+    ]
 
 
 def plan_route(layout: Any, stops: list[tuple[float, float]], margin: float = 0.1) -> list[tuple[float, float]]:

@@ -27,8 +27,12 @@ def _say() -> dict[str, str]:
 
 
 def fetch(obj: str, source: str = COUNTER) -> Seed:
-    return [{"action": "navigate_to", "target": source}, {"action": "detect_object", "object": obj},
-            {"action": "pick_object", "object": obj}, _say()]  # fmt: skip
+    return [
+        {"action": "navigate_to", "target": source},
+        {"action": "detect_object", "object": obj},
+        {"action": "pick_object", "object": obj},
+        _say(),
+    ]
 
 
 def carry(obj: str, place: str, held: bool = False) -> Seed:

@@ -28,8 +28,11 @@ SCRIPT = ((0.15, 0.0, 0.0), (0.0, 0.0, 0.5), (0.1, 0.0, -0.3), (-0.08, 0.0, 0.0)
 
 def _ms(values: list[float]) -> dict[str, float]:
     data = np.asarray(values or [0.0], dtype=float)
-    return {"p50": round(float(np.percentile(data, 50)), 2), "p99": round(float(np.percentile(data, 99)), 2),
-            "max": round(float(data.max()), 2)}  # fmt: skip
+    return {
+        "p50": round(float(np.percentile(data, 50)), 2),
+        "p99": round(float(np.percentile(data, 99)), 2),
+        "max": round(float(data.max()), 2),
+    }
 
 
 def _db_bytes(path: Path) -> int:
@@ -48,10 +51,16 @@ def _stored_bytes(factory: Any, session_id: int) -> dict[str, int]:
     from app.sessions.models import CameraFrameRow, TelemetryChunkRow
 
     with factory() as db:
-        telemetry = db.scalar(select(func.sum(func.length(TelemetryChunkRow.data)))
-                              .where(TelemetryChunkRow.session_id == session_id)) or 0  # fmt: skip
-        camera = db.scalar(select(func.sum(func.length(CameraFrameRow.jpeg)))
-                           .where(CameraFrameRow.session_id == session_id)) or 0  # fmt: skip
+        telemetry = (
+            db.scalar(
+                select(func.sum(func.length(TelemetryChunkRow.data))).where(TelemetryChunkRow.session_id == session_id)
+            )
+            or 0
+        )
+        camera = (
+            db.scalar(select(func.sum(func.length(CameraFrameRow.jpeg))).where(CameraFrameRow.session_id == session_id))
+            or 0
+        )
         frames = db.scalar(select(func.count(CameraFrameRow.id)).where(CameraFrameRow.session_id == session_id)) or 0
     return {"telemetry": int(telemetry), "camera": int(camera), "camera_frames": int(frames)}
 
@@ -85,8 +94,9 @@ def recording_in_real_time(phase_s: float, workdir: Path, seed: int = 0) -> dict
         _drive(worker, phase_s, time.monotonic)
         before = worker.state().control
         size0 = _db_bytes(db_path)
-        recorder = SessionRecorder(factory, worker, kind="serve", seed=seed, audio_dir=str(workdir / "audio"),
-                                   camera_hz=1.0)  # fmt: skip
+        recorder = SessionRecorder(
+            factory, worker, kind="serve", seed=seed, audio_dir=str(workdir / "audio"), camera_hz=1.0
+        )
         started = time.monotonic()
         _drive(worker, phase_s, time.monotonic)
         worker.submit(StopTeleop(source="bench"))
@@ -139,8 +149,9 @@ def long_session(minutes: float, db_path: Path, seed: int = 0) -> dict[str, Any]
     engine = make_engine(url)
     factory = make_session_factory(engine)
     worker = RobotWorker(generate_world(seed), realtime=False, perception=False)
-    recorder = SessionRecorder(factory, worker, kind="run", seed=seed, audio_dir=str(db_path.parent / "audio"),
-                               camera_hz=0)  # fmt: skip
+    recorder = SessionRecorder(
+        factory, worker, kind="run", seed=seed, audio_dir=str(db_path.parent / "audio"), camera_hz=0
+    )
     started = time.perf_counter()
     worker.start()
     sim_clock = lambda: worker.state().sim_time_s  # noqa: E731
@@ -163,8 +174,13 @@ def long_session(minutes: float, db_path: Path, seed: int = 0) -> dict[str, Any]
     finally:
         worker.stop()
         engine.dispose()
-    return {"session_id": recorder.session_id, "sim_minutes": round(sim_clock() / 60, 2), "wall_s": round(wall, 1),
-            "falls": falls, "mb_per_minute": round(_db_bytes(db_path) / 1e6 / minutes, 3)}  # fmt: skip
+    return {
+        "session_id": recorder.session_id,
+        "sim_minutes": round(sim_clock() / 60, 2),
+        "wall_s": round(wall, 1),
+        "falls": falls,
+        "mb_per_minute": round(_db_bytes(db_path) / 1e6 / minutes, 3),
+    }
 
 
 def review(workdir: Path, session_id: int) -> dict[str, Any]:
@@ -203,9 +219,11 @@ def review(workdir: Path, session_id: int) -> dict[str, Any]:
             for _ in range(3):
                 t0 = time.perf_counter()
                 page.goto(f"{server.url}/sessions?id={session_id}")
-                page.wait_for_function("document.querySelectorAll('#timeline li').length > 1 && "
-                                       "document.getElementById('replay-time').textContent.includes('/')",
-                                       timeout=60_000)  # fmt: skip
+                page.wait_for_function(
+                    "document.querySelectorAll('#timeline li').length > 1 && "
+                    "document.getElementById('replay-time').textContent.includes('/')",
+                    timeout=60_000,
+                )
                 loads.append(time.perf_counter() - t0)
             out["page_load_s"] = {"runs": [round(v, 3) for v in loads], "median": round(float(np.median(loads)), 3)}
             before = client.get("/api/replay").json()
@@ -216,8 +234,10 @@ def review(workdir: Path, session_id: int) -> dict[str, Any]:
             t1, f1 = time.perf_counter(), client.get("/api/replay").json()
             client.post("/api/replay/pause")
             browser.close()
-        out["replay"] = {"fps": round((f1["frames"] - f0["frames"]) / (t1 - t0), 1),
-                         "clock_ratio": round((f1["sim_time_s"] - f0["sim_time_s"]) / (t1 - t0), 3)}  # fmt: skip
+        out["replay"] = {
+            "fps": round((f1["frames"] - f0["frames"]) / (t1 - t0), 1),
+            "clock_ratio": round((f1["sim_time_s"] - f0["sim_time_s"]) / (t1 - t0), 3),
+        }
     return out
 
 
@@ -232,11 +252,24 @@ def run_sessions(phase_s: float = 30.0, session_minutes: float = 10.0) -> dict[s
         reviewed = review(review_dir, long["session_id"])
     rtf = realtime["control_while_recording"]["rtf"]
     bars = {
-        "page_load_s": {"target": TARGETS["page_load_s"], "measured": reviewed["page_load_s"]["median"],
-                        "met": reviewed["page_load_s"]["median"] <= TARGETS["page_load_s"]},
+        "page_load_s": {
+            "target": TARGETS["page_load_s"],
+            "measured": reviewed["page_load_s"]["median"],
+            "met": reviewed["page_load_s"]["median"] <= TARGETS["page_load_s"],
+        },
         "rtf_while_recording": {"target": TARGETS["rtf_min"], "measured": rtf, "met": rtf >= TARGETS["rtf_min"]},
-        "replay_fps": {"target": TARGETS["replay_fps_min"], "measured": reviewed["replay"]["fps"],
-                       "met": reviewed["replay"]["fps"] >= TARGETS["replay_fps_min"]},
-    }  # fmt: skip
-    return {"suite": "sessions", "cpus": os.cpu_count(), "recording": realtime, "long_session": long,
-            "review": reviewed, "bars": bars, "wall_s": round(time.perf_counter() - started, 1)}  # fmt: skip
+        "replay_fps": {
+            "target": TARGETS["replay_fps_min"],
+            "measured": reviewed["replay"]["fps"],
+            "met": reviewed["replay"]["fps"] >= TARGETS["replay_fps_min"],
+        },
+    }
+    return {
+        "suite": "sessions",
+        "cpus": os.cpu_count(),
+        "recording": realtime,
+        "long_session": long,
+        "review": reviewed,
+        "bars": bars,
+        "wall_s": round(time.perf_counter() - started, 1),
+    }

@@ -43,8 +43,11 @@ LATENCY_P50_TARGET_MS = 300.0
 
 def spoken_cases() -> tuple[Case, ...]:
     """The suite's commands a person would say to the robot as they are written."""
-    return tuple(c for c in CASES if not any(s["action"] == "say" and s["text"] != "*" for s in c.plan)
-                 and not any(ch.isdigit() for ch in c.text))  # fmt: skip
+    return tuple(
+        c
+        for c in CASES
+        if not any(s["action"] == "say" and s["text"] != "*" for s in c.plan) and not any(ch.isdigit() for ch in c.text)
+    )
 
 
 def word_errors(reference: str, hypothesis: str) -> tuple[int, int]:
@@ -75,8 +78,11 @@ class Trial:
     audio_s: float
 
 
-def run_trials(voices: tuple[tuple[str, int], ...] = VOICES, snrs: tuple[float | None, ...] = (None, NOISY_SNR_DB),
-               cases: tuple[Case, ...] | None = None) -> list[Trial]:  # fmt: skip
+def run_trials(
+    voices: tuple[tuple[str, int], ...] = VOICES,
+    snrs: tuple[float | None, ...] = (None, NOISY_SNR_DB),
+    cases: tuple[Case, ...] | None = None,
+) -> list[Trial]:
     layout = generate_world(0)
     world = WorldContext.from_layout(layout)
     asr = PocketSphinxASR(world.objects, world.places)
@@ -96,9 +102,23 @@ def run_trials(voices: tuple[tuple[str, int], ...] = VOICES, snrs: tuple[float |
                 plan_ms = (time.perf_counter() - started) * 1000
                 errors, words = word_errors(case.text, transcript.text)
                 right = result is not None and plan_matches(case.plan, result.plan.to_seed_list())
-                trials.append(Trial(case.text, voice, wpm, snr, transcript.text, round(transcript.confidence, 3),
-                                    transcript.in_grammar, errors, words, right, transcript.decode_s * 1000, plan_ms,
-                                    audio.duration_s))  # fmt: skip
+                trials.append(
+                    Trial(
+                        case.text,
+                        voice,
+                        wpm,
+                        snr,
+                        transcript.text,
+                        round(transcript.confidence, 3),
+                        transcript.in_grammar,
+                        errors,
+                        words,
+                        right,
+                        transcript.decode_s * 1000,
+                        plan_ms,
+                        audio.duration_s,
+                    )
+                )
     return trials
 
 
@@ -135,17 +155,32 @@ def summarise(trials: list[Trial]) -> dict[str, Any]:
     return result
 
 
-ROBOT_MICROPHONE_COMMANDS = ("go to the charging dock", "pick up the red mug from the kitchen counter",
-                             "bring the green apple to the living room table", "what do you see", "go home",
-                             "find the blue bottle", "wait for three seconds", "stop")  # fmt: skip
+ROBOT_MICROPHONE_COMMANDS = (
+    "go to the charging dock",
+    "pick up the red mug from the kitchen counter",
+    "bring the green apple to the living room table",
+    "what do you see",
+    "go home",
+    "find the blue bottle",
+    "wait for three seconds",
+    "stop",
+)
 
 
 class ReplayStream:
     """An input device that plays a recording in real time (as `sounddevice.InputStream` calls back), noting when
     each block went out."""
 
-    def __init__(self, samples: np.ndarray, samplerate: int, channels: int, dtype: str, device: int,
-                 blocksize: int, callback: Any) -> None:  # fmt: skip
+    def __init__(
+        self,
+        samples: np.ndarray,
+        samplerate: int,
+        channels: int,
+        dtype: str,
+        device: int,
+        blocksize: int,
+        callback: Any,
+    ) -> None:
         self.samples, self.block, self.callback = samples, blocksize, callback
         self.sent_at: list[float] = []  # wall-clock time each block was delivered
         self._stop = threading.Event()
@@ -252,8 +287,15 @@ def run_voice() -> dict[str, Any]:
     voices = [f"{v}@{w}" for v, w in VOICES]
     wall_s = round(time.perf_counter() - started, 1)
     commands = len({t.text for t in trials})
-    return {"suite": "voice", "commands": commands, "voices": voices, "wall_s": wall_s, **summary, "bars": bars,
-            "misheard": misheard}  # fmt: skip
+    return {
+        "suite": "voice",
+        "commands": commands,
+        "voices": voices,
+        "wall_s": wall_s,
+        **summary,
+        "bars": bars,
+        "misheard": misheard,
+    }
 
 
 def _bar(target: float, measured: float | None, met: bool) -> dict[str, Any]:

@@ -65,12 +65,20 @@ def write_session_json(db: Session, session_id: int, out: IO[str], audio_dir: st
         "version": VERSION,
         "exported_at": datetime.now(UTC).isoformat(),
         "session": {
-            "id": row.id, "kind": row.kind, "started_at": _iso(row.started_at), "ended_at": _iso(row.ended_at),
-            "seed": row.seed, "backend": row.backend, "outcome": row.outcome, "summary": row.summary,
-            "robot_model": row.robot_model, "scene_mjcf": row.scene_mjcf, "telemetry_layout": row.telemetry_layout,
+            "id": row.id,
+            "kind": row.kind,
+            "started_at": _iso(row.started_at),
+            "ended_at": _iso(row.ended_at),
+            "seed": row.seed,
+            "backend": row.backend,
+            "outcome": row.outcome,
+            "summary": row.summary,
+            "robot_model": row.robot_model,
+            "scene_mjcf": row.scene_mjcf,
+            "telemetry_layout": row.telemetry_layout,
             "telemetry_hz": row.telemetry_hz,
         },
-    }  # fmt: skip
+    }
     out.write(json.dumps(head)[:-1])  # the document stays open: the sections follow
     sections: list[tuple[str, Iterator[dict[str, Any]]]] = [
         ("commands", _commands(db, session_id)),
@@ -87,8 +95,11 @@ def write_session_json(db: Session, session_id: int, out: IO[str], audio_dir: st
         out.write("]")
     out.write(', "telemetry": [')
     first = True
-    for (blob,) in db.execute(select(TelemetryChunkRow.data).where(TelemetryChunkRow.session_id == session_id)
-                              .order_by(TelemetryChunkRow.sim_t0, TelemetryChunkRow.first_seq)):  # fmt: skip
+    for (blob,) in db.execute(
+        select(TelemetryChunkRow.data)
+        .where(TelemetryChunkRow.session_id == session_id)
+        .order_by(TelemetryChunkRow.sim_t0, TelemetryChunkRow.first_seq)
+    ):
         for r in decode_rows(blob):
             out.write(("" if first else ",") + _row_json(r))
             first = False
@@ -97,43 +108,86 @@ def write_session_json(db: Session, session_id: int, out: IO[str], audio_dir: st
 
 def _commands(db: Session, sid: int) -> Iterator[dict[str, Any]]:
     for c in db.scalars(select(CommandRow).where(CommandRow.session_id == sid).order_by(CommandRow.id)):
-        yield {"robot_command_id": c.robot_command_id, "received_at": _iso(c.received_at), "source": c.source,
-               "text": c.text, "accepted": c.accepted, "refusal": c.refusal, "errors": c.errors}  # fmt: skip
+        yield {
+            "robot_command_id": c.robot_command_id,
+            "received_at": _iso(c.received_at),
+            "source": c.source,
+            "text": c.text,
+            "accepted": c.accepted,
+            "refusal": c.refusal,
+            "errors": c.errors,
+        }
 
 
 def _transcripts(db: Session, sid: int, audio_dir: str | None) -> Iterator[dict[str, Any]]:
     for t in db.scalars(select(TranscriptRow).where(TranscriptRow.session_id == sid).order_by(TranscriptRow.id)):
         wav = recording_file(audio_dir, t.audio_path) if audio_dir and t.audio_path else None
-        yield {"received_at": _iso(t.received_at), "source": t.source, "text": t.text, "confidence": t.confidence,
-               "engine": t.engine, "in_grammar": t.in_grammar, "audio_s": t.audio_s, "decode_ms": t.decode_ms,
-               "audio_wav_base64": base64.b64encode(wav.read_bytes()).decode() if wav else None}  # fmt: skip
+        yield {
+            "received_at": _iso(t.received_at),
+            "source": t.source,
+            "text": t.text,
+            "confidence": t.confidence,
+            "engine": t.engine,
+            "in_grammar": t.in_grammar,
+            "audio_s": t.audio_s,
+            "decode_ms": t.decode_ms,
+            "audio_wav_base64": base64.b64encode(wav.read_bytes()).decode() if wav else None,
+        }
 
 
 def _plans(db: Session, sid: int) -> Iterator[dict[str, Any]]:
     for p in db.scalars(select(PlanRow).where(PlanRow.session_id == sid).order_by(PlanRow.id)):
-        yield {"robot_plan_id": p.robot_plan_id, "robot_command_id": p.robot_command_id, "revision": p.revision,
-               "text": p.text, "plan": p.plan, "created_at": _iso(p.created_at), "state": p.state,
-               "finished_at": _iso(p.finished_at)}  # fmt: skip
+        yield {
+            "robot_plan_id": p.robot_plan_id,
+            "robot_command_id": p.robot_command_id,
+            "revision": p.revision,
+            "text": p.text,
+            "plan": p.plan,
+            "created_at": _iso(p.created_at),
+            "state": p.state,
+            "finished_at": _iso(p.finished_at),
+        }
 
 
 def _steps(db: Session, sid: int) -> Iterator[dict[str, Any]]:
     for s in db.scalars(select(StepResultRow).where(StepResultRow.session_id == sid).order_by(StepResultRow.id)):
-        yield {"robot_plan_id": s.robot_plan_id, "step_index": s.step_index, "action": s.action, "args": s.args,
-               "state": s.state, "detail": s.detail, "sim_start_s": s.sim_start_s, "sim_end_s": s.sim_end_s,
-               "recorded_at": _iso(s.recorded_at)}  # fmt: skip
+        yield {
+            "robot_plan_id": s.robot_plan_id,
+            "step_index": s.step_index,
+            "action": s.action,
+            "args": s.args,
+            "state": s.state,
+            "detail": s.detail,
+            "sim_start_s": s.sim_start_s,
+            "sim_end_s": s.sim_end_s,
+            "recorded_at": _iso(s.recorded_at),
+        }
 
 
 def _events(db: Session, sid: int) -> Iterator[dict[str, Any]]:
     for e in db.scalars(select(EventRow).where(EventRow.session_id == sid).order_by(EventRow.seq)):
-        yield {"seq": e.seq, "kind": e.kind, "level": e.level, "message": e.message, "data": e.data,
-               "wall_time": _iso(e.wall_time), "sim_time_s": e.sim_time_s}  # fmt: skip
+        yield {
+            "seq": e.seq,
+            "kind": e.kind,
+            "level": e.level,
+            "message": e.message,
+            "data": e.data,
+            "wall_time": _iso(e.wall_time),
+            "sim_time_s": e.sim_time_s,
+        }
 
 
 def _frames(db: Session, sid: int) -> Iterator[dict[str, Any]]:
     for f in db.scalars(select(CameraFrameRow).where(CameraFrameRow.session_id == sid).order_by(CameraFrameRow.id)):
-        yield {"seq": f.seq, "sim_time_s": f.sim_time_s, "wall_time": _iso(f.wall_time), "width": f.width,
-               "height": f.height, "detections": f.detections,
-               "jpeg_base64": base64.b64encode(f.jpeg).decode()}  # fmt: skip
+        yield {
+            "seq": f.seq,
+            "sim_time_s": f.sim_time_s,
+            "wall_time": _iso(f.wall_time),
+            "width": f.width,
+            "height": f.height,
+            "detections": f.detections,
+            "jpeg_base64": base64.b64encode(f.jpeg).decode(),
+        }
 
 
 def export_session_json(factory: sessionmaker, session_id: int, path: str | Path, audio_dir: str | None) -> None:
@@ -161,8 +215,7 @@ def read_archive(source: str | Path | IO[str] | bytes) -> dict[str, Any]:
         raise ArchiveError(f'not a session export (its "format" should be "{FORMAT}")')
     if doc.get("version") != VERSION:
         raise ArchiveError(f"session export version {doc.get('version')!r}; this version reads {VERSION}")
-    for key in ("session", "commands", "transcripts", "plans", "step_results", "events", "camera_frames",
-                "telemetry"):  # fmt: skip
+    for key in ("session", "commands", "transcripts", "plans", "step_results", "events", "camera_frames", "telemetry"):
         if key not in doc:
             raise ArchiveError(f'the export has no "{key}"')
     return doc
@@ -182,59 +235,126 @@ def import_session(factory: sessionmaker, doc: dict[str, Any], audio_dir: str) -
     saved_audio: list[Path] = []
     try:
         with factory() as db:
-            row = SessionRow(kind="import", started_at=_when(s["started_at"]), ended_at=_when(s.get("ended_at")),
-                             seed=int(s["seed"]), backend=s.get("backend") or "sim",
-                             outcome=s.get("outcome") or ("ended" if s.get("ended_at") else "interrupted"),
-                             summary={**(s.get("summary") or {}), "imported_from": s.get("id"),
-                                      "original_kind": s.get("kind")},
-                             robot_model=s.get("robot_model"), scene_mjcf=s.get("scene_mjcf"),
-                             telemetry_layout=layout, telemetry_hz=s.get("telemetry_hz"),
-                             heartbeat_at=_when(s.get("ended_at")))  # fmt: skip
+            row = SessionRow(
+                kind="import",
+                started_at=_when(s["started_at"]),
+                ended_at=_when(s.get("ended_at")),
+                seed=int(s["seed"]),
+                backend=s.get("backend") or "sim",
+                outcome=s.get("outcome") or ("ended" if s.get("ended_at") else "interrupted"),
+                summary={**(s.get("summary") or {}), "imported_from": s.get("id"), "original_kind": s.get("kind")},
+                robot_model=s.get("robot_model"),
+                scene_mjcf=s.get("scene_mjcf"),
+                telemetry_layout=layout,
+                telemetry_hz=s.get("telemetry_hz"),
+                heartbeat_at=_when(s.get("ended_at")),
+            )
             if row.ended_at is None:
                 row.ended_at = row.started_at
             db.add(row)
             db.flush()
             sid = row.id
             for c in doc["commands"]:
-                db.add(CommandRow(session_id=sid, robot_command_id=c.get("robot_command_id"),
-                                  received_at=_when(c["received_at"]), source=c["source"], text=c["text"],
-                                  accepted=c["accepted"], refusal=c.get("refusal"),
-                                  errors=c.get("errors")))  # fmt: skip
+                db.add(
+                    CommandRow(
+                        session_id=sid,
+                        robot_command_id=c.get("robot_command_id"),
+                        received_at=_when(c["received_at"]),
+                        source=c["source"],
+                        text=c["text"],
+                        accepted=c["accepted"],
+                        refusal=c.get("refusal"),
+                        errors=c.get("errors"),
+                    )
+                )
             for t in doc["transcripts"]:
                 path = None
                 if t.get("audio_wav_base64"):
                     path = save_recording(audio_dir, sid, base64.b64decode(t["audio_wav_base64"]))
                     saved_audio.append(Path(audio_dir) / path)
-                db.add(TranscriptRow(session_id=sid, received_at=_when(t["received_at"]), source=t["source"],
-                                     text=t["text"], confidence=t["confidence"], engine=t["engine"],
-                                     in_grammar=t["in_grammar"], audio_s=t["audio_s"], decode_ms=t["decode_ms"],
-                                     audio_path=path))  # fmt: skip
+                db.add(
+                    TranscriptRow(
+                        session_id=sid,
+                        received_at=_when(t["received_at"]),
+                        source=t["source"],
+                        text=t["text"],
+                        confidence=t["confidence"],
+                        engine=t["engine"],
+                        in_grammar=t["in_grammar"],
+                        audio_s=t["audio_s"],
+                        decode_ms=t["decode_ms"],
+                        audio_path=path,
+                    )
+                )
             for p in doc["plans"]:
-                db.add(PlanRow(session_id=sid, robot_plan_id=p["robot_plan_id"],
-                               robot_command_id=p["robot_command_id"], revision=p["revision"], text=p["text"],
-                               plan=p["plan"], created_at=_when(p["created_at"]), state=p["state"],
-                               finished_at=_when(p.get("finished_at"))))  # fmt: skip
+                db.add(
+                    PlanRow(
+                        session_id=sid,
+                        robot_plan_id=p["robot_plan_id"],
+                        robot_command_id=p["robot_command_id"],
+                        revision=p["revision"],
+                        text=p["text"],
+                        plan=p["plan"],
+                        created_at=_when(p["created_at"]),
+                        state=p["state"],
+                        finished_at=_when(p.get("finished_at")),
+                    )
+                )
             for st in doc["step_results"]:
-                db.add(StepResultRow(session_id=sid, robot_plan_id=st["robot_plan_id"], step_index=st["step_index"],
-                                     action=st["action"], args=st["args"], state=st["state"], detail=st["detail"],
-                                     sim_start_s=st.get("sim_start_s"), sim_end_s=st.get("sim_end_s"),
-                                     recorded_at=_when(st["recorded_at"])))  # fmt: skip
+                db.add(
+                    StepResultRow(
+                        session_id=sid,
+                        robot_plan_id=st["robot_plan_id"],
+                        step_index=st["step_index"],
+                        action=st["action"],
+                        args=st["args"],
+                        state=st["state"],
+                        detail=st["detail"],
+                        sim_start_s=st.get("sim_start_s"),
+                        sim_end_s=st.get("sim_end_s"),
+                        recorded_at=_when(st["recorded_at"]),
+                    )
+                )
             for e in doc["events"]:
-                db.add(EventRow(session_id=sid, seq=e["seq"], kind=e["kind"], level=e["level"],
-                                message=e["message"], data=e.get("data"), wall_time=_when(e["wall_time"]),
-                                sim_time_s=e["sim_time_s"]))  # fmt: skip
+                db.add(
+                    EventRow(
+                        session_id=sid,
+                        seq=e["seq"],
+                        kind=e["kind"],
+                        level=e["level"],
+                        message=e["message"],
+                        data=e.get("data"),
+                        wall_time=_when(e["wall_time"]),
+                        sim_time_s=e["sim_time_s"],
+                    )
+                )
             for f in doc["camera_frames"]:
-                db.add(CameraFrameRow(session_id=sid, seq=f["seq"], sim_time_s=f["sim_time_s"],
-                                      wall_time=_when(f["wall_time"]), width=f["width"], height=f["height"],
-                                      jpeg=base64.b64decode(f["jpeg_base64"]),
-                                      detections=f.get("detections")))  # fmt: skip
+                db.add(
+                    CameraFrameRow(
+                        session_id=sid,
+                        seq=f["seq"],
+                        sim_time_s=f["sim_time_s"],
+                        wall_time=_when(f["wall_time"]),
+                        width=f["width"],
+                        height=f["height"],
+                        jpeg=base64.b64decode(f["jpeg_base64"]),
+                        detections=f.get("detections"),
+                    )
+                )
             for start in range(0, len(telemetry), IMPORT_CHUNK_ROWS):
                 part = telemetry[start : start + IMPORT_CHUNK_ROWS]
-                db.add(TelemetryChunkRow(session_id=sid, first_seq=start, count=len(part), sim_t0=float(part[0, 0]),
-                                         sim_t1=float(part[-1, 0]),
-                                         wall_t0=datetime.fromtimestamp(part[0, 1], tz=UTC),
-                                         wall_t1=datetime.fromtimestamp(part[-1, 1], tz=UTC),
-                                         data=encode_rows(part)))  # fmt: skip
+                db.add(
+                    TelemetryChunkRow(
+                        session_id=sid,
+                        first_seq=start,
+                        count=len(part),
+                        sim_t0=float(part[0, 0]),
+                        sim_t1=float(part[-1, 0]),
+                        wall_t0=datetime.fromtimestamp(part[0, 1], tz=UTC),
+                        wall_t1=datetime.fromtimestamp(part[-1, 1], tz=UTC),
+                        data=encode_rows(part),
+                    )
+                )
             db.commit()
             return sid
     except (KeyError, TypeError, ValueError) as exc:

@@ -22,8 +22,15 @@ def _factory(settings: Settings) -> Any:
 def _list(args: argparse.Namespace, settings: Settings) -> int:
     from app.sessions.queries import SessionFilter, list_sessions
 
-    filters = SessionFilter(started_from=args.since, started_to=args.until, outcome=args.outcome, text=args.text,
-                            had_estop=args.had_estop, had_fall=args.had_fall, kind=args.kind)  # fmt: skip
+    filters = SessionFilter(
+        started_from=args.since,
+        started_to=args.until,
+        outcome=args.outcome,
+        text=args.text,
+        had_estop=args.had_estop,
+        had_fall=args.had_fall,
+        kind=args.kind,
+    )
     with _factory(settings)() as db:
         items, total = list_sessions(db, filters, limit=args.limit, offset=args.offset)
     if args.json:
@@ -31,9 +38,11 @@ def _list(args: argparse.Namespace, settings: Settings) -> int:
         return 0
     print(f"{total} sessions" + (f" (showing {len(items)})" if len(items) < total else ""))
     for s in items:
-        print(f"{s['id']:>5}  {s['kind']:<6} {s['started_at'][:19]}  seed {s['seed']:<3} {s['outcome']:<11} "
-              f"{s['command_count']} commands, {s['estop_count']} e-stops, {s['fall_count']} falls  "
-              f"{s['first_command'] or ''}")  # fmt: skip
+        print(
+            f"{s['id']:>5}  {s['kind']:<6} {s['started_at'][:19]}  seed {s['seed']:<3} {s['outcome']:<11} "
+            f"{s['command_count']} commands, {s['estop_count']} e-stops, {s['fall_count']} falls  "
+            f"{s['first_command'] or ''}"
+        )
     return 0
 
 

@@ -20,8 +20,9 @@ log = logging.getLogger(__name__)
 STALE_AFTER_S = 30.0
 
 
-def close_interrupted_sessions(factory: sessionmaker, now: datetime | None = None,
-                               stale_after_s: float = STALE_AFTER_S) -> list[int]:  # fmt: skip
+def close_interrupted_sessions(
+    factory: sessionmaker, now: datetime | None = None, stale_after_s: float = STALE_AFTER_S
+) -> list[int]:
     """Sessions still open whose recorder is gone (the server was killed): closed as "interrupted" at the last
     thing recorded. A recorder on this machine is gone when its process is; one elsewhere (another server on a
     shared database) when its heartbeat has been silent for `stale_after_s`."""
@@ -76,8 +77,14 @@ def delete_sessions(factory: sessionmaker, audio_dir: str, session_ids: list[int
     return deleted
 
 
-def apply_retention(factory: sessionmaker, audio_dir: str, max_age_days: float, max_count: int,
-                    keep: set[int] | None = None, now: datetime | None = None) -> list[int]:  # fmt: skip
+def apply_retention(
+    factory: sessionmaker,
+    audio_dir: str,
+    max_age_days: float,
+    max_count: int,
+    keep: set[int] | None = None,
+    now: datetime | None = None,
+) -> list[int]:
     """Delete ended sessions older than `max_age_days` and beyond the newest `max_count` (0 turns either off).
     Sessions in `keep` (the one being recorded) and open ones are never deleted."""
     now = now or datetime.now(UTC)

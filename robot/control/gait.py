@@ -274,8 +274,13 @@ class GaitPlannerCore:
         supports = self._walk.replan_supports(self._footsteps, trajectory, t, self._last_replan)
         self._trajectory = trajectory = self._walk.replan(supports, trajectory, t)
         self._last_replan = t
-        segment = self._sample(trajectory, t, ends_standing=True, plan_ms=(time.perf_counter() - started) * 1e3,
-                               horizon=trajectory.t_end - t)  # fmt: skip
+        segment = self._sample(
+            trajectory,
+            t,
+            ends_standing=True,
+            plan_ms=(time.perf_counter() - started) * 1e3,
+            horizon=trajectory.t_end - t,
+        )
         return segment
 
     # --------------------------------------------------------------------------------------------------------

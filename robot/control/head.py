@@ -49,8 +49,9 @@ class HeadController:
         """Stay where it is now (an e-stop holds every joint; nothing resumes on release)."""
         self.target = self.command
 
-    def angles_to_look_at(self, trunk_position: np.ndarray, trunk_rotation: np.ndarray,
-                          target: np.ndarray) -> tuple[float, float, bool]:  # fmt: skip
+    def angles_to_look_at(
+        self, trunk_position: np.ndarray, trunk_rotation: np.ndarray, target: np.ndarray
+    ) -> tuple[float, float, bool]:
         """Pan and tilt that centre `target` (world) in the camera, for a trunk at this pose; and whether it is
         within the head's reach (False: turn the body, or look from where the head is)."""
         local = trunk_rotation.T @ (np.asarray(target, dtype=float) - trunk_position)

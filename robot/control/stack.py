@@ -39,8 +39,14 @@ def build_locomotion(
     `model_dir`: where the placo model goes (default: the per-user cache, see `write_placo_model`)."""
     model = write_placo_model(model_dir)
     planner = ProcessGaitPlanner(model, CONTROL_DT) if planner_process else InlineGaitPlanner(model, CONTROL_DT)
-    return LocomotionController(planner, WholeBodyIK(model, CONTROL_DT), AnkleBalance(backend.joint_axes()),
-                                CONTROL_DT, LegOdometry(model), pose_loop=pose_loop)  # fmt: skip
+    return LocomotionController(
+        planner,
+        WholeBodyIK(model, CONTROL_DT),
+        AnkleBalance(backend.joint_axes()),
+        CONTROL_DT,
+        LegOdometry(model),
+        pose_loop=pose_loop,
+    )
 
 
 def sensors(m: HasLegSensors) -> LegSensors:

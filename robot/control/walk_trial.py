@@ -156,8 +156,19 @@ def run_trial(
             if m.fallen:
                 loco.halt()
                 nan = float("nan")
-                return TrialResult(True, t, distance, nan, nan, commanded_yaw, drifts, ticks, max_tilt,
-                                   drifts_vs_command, drifts_from_standing)  # fmt: skip
+                return TrialResult(
+                    True,
+                    t,
+                    distance,
+                    nan,
+                    nan,
+                    commanded_yaw,
+                    drifts,
+                    ticks,
+                    max_tilt,
+                    drifts_vs_command,
+                    drifts_from_standing,
+                )
         travelled = distance - distance_start
         if line is not None and velocity.vy == 0.0 and velocity.yaw_rate == 0.0 and travelled > 0.2:
             # sideways departure from the line the robot was pointed along, per metre commanded
@@ -170,8 +181,19 @@ def run_trial(
     end = true_pose(backend.read())
     error = math.hypot(end.x - ref.x, end.y - ref.y)
     yaw_error = (start.yaw + yaw_total) - ref.yaw
-    return TrialResult(False, None, distance, error, yaw_error, commanded_yaw, drifts, ticks, max_tilt,
-                       drifts_vs_command, drifts_from_standing)  # fmt: skip
+    return TrialResult(
+        False,
+        None,
+        distance,
+        error,
+        yaw_error,
+        commanded_yaw,
+        drifts,
+        ticks,
+        max_tilt,
+        drifts_vs_command,
+        drifts_from_standing,
+    )
 
 
 def _lateral_offset(actual: Pose2D, reference: Pose2D) -> float:

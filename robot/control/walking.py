@@ -139,8 +139,13 @@ class WalkingController:
         i = segment.index(self._t - self.dt)
         support = {0: "both", 1: "left", 2: "right"}[int(segment.support[i])]
         com = segment.com[i]
-        return GaitView(self.phase, tuple(segment.footsteps), (float(com[0]), float(com[1]), float(com[2])),
-                        (float(segment.zmp[i, 0]), float(segment.zmp[i, 1])), support)  # fmt: skip
+        return GaitView(
+            self.phase,
+            tuple(segment.footsteps),
+            (float(com[0]), float(com[1]), float(com[2])),
+            (float(segment.zmp[i, 0]), float(segment.zmp[i, 1])),
+            support,
+        )
 
     def _request(self, kind: str, at: float) -> None:
         self.planner.request(kind, self._command, at)

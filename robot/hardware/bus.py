@@ -164,8 +164,9 @@ class DynamixelBus:
         self._health = {j.servo_id: _ServoHealth() for j in self.joints}
         self._index = {j.servo_id: i for i, j in enumerate(self.joints)}
         n = len(self.joints)
-        self._last = BusReading(np.zeros(n), np.zeros(n), np.zeros(n), np.full(n, np.nan), np.full(n, np.nan),
-                                np.zeros(n, dtype=np.int64))  # fmt: skip
+        self._last = BusReading(
+            np.zeros(n), np.zeros(n), np.zeros(n), np.full(n, np.nan), np.full(n, np.nan), np.zeros(n, dtype=np.int64)
+        )
         self._tick = 0
         self.counters = BusCounters()
         self._fast: GroupSyncRead | None = None
@@ -248,8 +249,11 @@ class DynamixelBus:
         """Joints whose servo's bus watchdog has tripped (it stopped, and takes no goals until re-armed)."""
         reader = self._reader(ct.BUS_WATCHDOG.address, 1)
         reader.txRxPacket()
-        return [self.joints[self._index[i]].joint for i, data in reader.data_dict.items()
-                if data and ct.BUS_WATCHDOG.decode(bytes(data)) < 0]  # fmt: skip
+        return [
+            self.joints[self._index[i]].joint
+            for i, data in reader.data_dict.items()
+            if data and ct.BUS_WATCHDOG.decode(bytes(data)) < 0
+        ]
 
     # per tick ------------------------------------------------------------------------------------------------
 
@@ -287,10 +291,17 @@ class DynamixelBus:
         self.counters.ticks += 1
         self.counters.failed_reads += failed
         last = self._last  # the arrays kept up to date by _store; copied so the caller's cannot change under it
-        return BusReading(last.positions.copy(), last.velocities.copy(), last.currents_a.copy(),
-                          last.voltages_v.copy(), last.temperatures_c.copy(), last.hardware_errors.copy(),
-                          lost=tuple(j.joint for j in self.joints if self._health[j.servo_id].lost),
-                          failed_reads=failed, read_ms=(time.perf_counter() - started) * 1e3)  # fmt: skip
+        return BusReading(
+            last.positions.copy(),
+            last.velocities.copy(),
+            last.currents_a.copy(),
+            last.voltages_v.copy(),
+            last.temperatures_c.copy(),
+            last.hardware_errors.copy(),
+            lost=tuple(j.joint for j in self.joints if self._health[j.servo_id].lost),
+            failed_reads=failed,
+            read_ms=(time.perf_counter() - started) * 1e3,
+        )
 
     def reboot(self, joint: str) -> bool:
         """Reboot one servo (clears a latched hardware error; its torque comes back off). It is read again."""

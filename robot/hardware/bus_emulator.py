@@ -58,13 +58,24 @@ class EmulatedXM430:
         self.voltage_v = 12.0
         self._position = position_rad
         self._velocity = 0.0
-        for field, value in ((ct.MODEL_NUMBER, ct.XM430_W350_MODEL), (ct.FIRMWARE_VERSION, 48), (ct.ID, servo_id),
-                             (ct.BAUD_RATE, 3), (ct.RETURN_DELAY_TIME, ct.RETURN_DELAY_FACTORY),
-                             (ct.OPERATING_MODE, 3),
-                             (ct.TEMPERATURE_LIMIT, 80), (ct.MAX_VOLTAGE_LIMIT, 160), (ct.MIN_VOLTAGE_LIMIT, 95),
-                             (ct.CURRENT_LIMIT, 1193), (ct.MAX_POSITION_LIMIT, 4095), (ct.MIN_POSITION_LIMIT, 0),
-                             (ct.SHUTDOWN, 0x34), (ct.STATUS_RETURN_LEVEL, 2), (ct.POSITION_P_GAIN, 800),
-                             (ct.PROFILE_VELOCITY, 0)):  # fmt: skip
+        for field, value in (
+            (ct.MODEL_NUMBER, ct.XM430_W350_MODEL),
+            (ct.FIRMWARE_VERSION, 48),
+            (ct.ID, servo_id),
+            (ct.BAUD_RATE, 3),
+            (ct.RETURN_DELAY_TIME, ct.RETURN_DELAY_FACTORY),
+            (ct.OPERATING_MODE, 3),
+            (ct.TEMPERATURE_LIMIT, 80),
+            (ct.MAX_VOLTAGE_LIMIT, 160),
+            (ct.MIN_VOLTAGE_LIMIT, 95),
+            (ct.CURRENT_LIMIT, 1193),
+            (ct.MAX_POSITION_LIMIT, 4095),
+            (ct.MIN_POSITION_LIMIT, 0),
+            (ct.SHUTDOWN, 0x34),
+            (ct.STATUS_RETURN_LEVEL, 2),
+            (ct.POSITION_P_GAIN, 800),
+            (ct.PROFILE_VELOCITY, 0),
+        ):
             self._set(field, value)
         self._set(ct.GOAL_POSITION, self._ticks(position_rad))
         self.last_heard_s = time.monotonic()  # the last packet addressed to this servo (the bus watchdog's clock)
@@ -362,8 +373,13 @@ class EmulatedBus:
         if instruction == Instruction.FAST_SYNC_READ and packet.packet_id == BROADCAST_ID and len(p) >= 4:
             return self._fast_sync_read(p[0] | p[1] << 8, p[2] | p[3] << 8, p[4:])
         if instruction == Instruction.PING:
-            servos = sorted(self.servos.values(), key=lambda s: s.servo_id) if packet.packet_id == BROADCAST_ID \
-                else [target] if target is not None else []  # fmt: skip
+            servos = (
+                sorted(self.servos.values(), key=lambda s: s.servo_id)
+                if packet.packet_id == BROADCAST_ID
+                else [target]
+                if target is not None
+                else []
+            )
             out = []
             for servo in servos:
                 if not servo.faults.dead:  # a ping is answered whatever the status return level

@@ -156,9 +156,17 @@ def load_config(path: str | Path) -> HardwareConfig:
         if name not in known:
             raise ConfigError(f"unknown joint {name!r} in {path}; joints: {', '.join(humanoid_v1.JOINT_NAMES)}")
         try:
-            joints.append(JointServo(name, int(entry["id"]), int(entry.get("direction", 1)),
-                                     float(entry.get("offset_rad", 0.0)), float(entry.get("scale", 1.0)),
-                                     float(entry["min"]), float(entry["max"])))  # fmt: skip
+            joints.append(
+                JointServo(
+                    name,
+                    int(entry["id"]),
+                    int(entry.get("direction", 1)),
+                    float(entry.get("offset_rad", 0.0)),
+                    float(entry.get("scale", 1.0)),
+                    float(entry["min"]),
+                    float(entry["max"]),
+                )
+            )
         except (KeyError, TypeError, ValueError) as exc:
             raise ConfigError(f"joint {name} in {path}: {exc!r} (needs id, min, max)") from exc
     missing = [n for n in humanoid_v1.JOINT_NAMES if n not in {j.joint for j in joints}]
@@ -205,9 +213,16 @@ def dump_config(config: HardwareConfig) -> str:
         f'lidar = "{config.lidar}"',
     ]
     for j in config.joints:
-        lines += ["", f"[joints.{j.joint}]", f"id = {j.servo_id}", f"direction = {j.direction}",
-                  f"offset_rad = {j.offset_rad!r}", f"scale = {j.scale!r}", f"min = {j.lower!r}",
-                  f"max = {j.upper!r}"]  # fmt: skip
+        lines += [
+            "",
+            f"[joints.{j.joint}]",
+            f"id = {j.servo_id}",
+            f"direction = {j.direction}",
+            f"offset_rad = {j.offset_rad!r}",
+            f"scale = {j.scale!r}",
+            f"min = {j.lower!r}",
+            f"max = {j.upper!r}",
+        ]
     return "\n".join(lines) + "\n"
 
 

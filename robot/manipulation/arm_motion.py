@@ -154,8 +154,9 @@ class ArmMotion:
             orient = move.orient if isinstance(move, HandMove) else self._orientation > 0.5
         if correct:  # height only: the sag is vertical, and the target may be out of reach sideways
             error = target[2] - self._ik.hand_position(measured_joints, self._side)[2]
-            self._correction[2] = np.clip(self._correction[2] + SAG_GAIN_PER_S * self._dt * error,
-                                          -MAX_SAG_CORRECTION_M, MAX_SAG_CORRECTION_M)  # fmt: skip
+            self._correction[2] = np.clip(
+                self._correction[2] + SAG_GAIN_PER_S * self._dt * error, -MAX_SAG_CORRECTION_M, MAX_SAG_CORRECTION_M
+            )
         step = self._dt / ORIENTATION_RAMP_S
         self._orientation = min(1.0, self._orientation + step) if orient else max(0.0, self._orientation - step)
         targets = self._ik.solve(target + self._correction, height, self._orientation, gripper)

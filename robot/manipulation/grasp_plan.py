@@ -48,8 +48,9 @@ class Stance:
     yaw: float
 
 
-def grasp_stance(object_xy: tuple[float, float], facing_yaw: float,
-                 blocked: Callable[[float, float], bool] | None = None) -> Stance:  # fmt: skip
+def grasp_stance(
+    object_xy: tuple[float, float], facing_yaw: float, blocked: Callable[[float, float], bool] | None = None
+) -> Stance:
     """The pose to stand at, facing `facing_yaw`, to have the object at GRASP_OFFSET from the feet. Given the map
     (`blocked`: is this point taken?), a stance with something close on its left (a wall at the counter's end) moves
     right instead, with the object at CROWDED_LEFT_OFFSET."""

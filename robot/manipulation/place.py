@@ -106,8 +106,9 @@ EDGE_MARGIN_M = 0.05
 SPOT_GRID_M = 0.01
 
 
-def choose_spot(surface: Box, approach: tuple[float, float, float],
-                occupied: list[tuple[float, float]]) -> np.ndarray | None:  # fmt: skip
+def choose_spot(
+    surface: Box, approach: tuple[float, float, float], occupied: list[tuple[float, float]]
+) -> np.ndarray | None:
     """A free spot on `surface` in front of the `approach` pose, nearest the robot's line of approach, clear of the
     `occupied` points; None if the surface is full there."""
     x, y, yaw = approach
@@ -127,8 +128,9 @@ def choose_spot(surface: Box, approach: tuple[float, float, float],
     return None
 
 
-def spots_in_reach(surface: Box, pose: tuple[float, float, float],
-                   occupied: list[tuple[float, float]]) -> list[np.ndarray]:  # fmt: skip
+def spots_in_reach(
+    surface: Box, pose: tuple[float, float, float], occupied: list[tuple[float, float]]
+) -> list[np.ndarray]:
     """Free spots on `surface` in the right hand's comfortable reach of a robot standing at `pose` (x, y, heading;
     its feet roughly there), nearest the middle of the reach window first: wherever the robot came to rest by the
     surface, it can put the object down there without walking again. The caller checks the exact reach from the

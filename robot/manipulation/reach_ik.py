@@ -111,8 +111,11 @@ class ReachIK:
         closing = solver.add_axisalign_task(hand_frame, np.array([0.0, 0.0, 1.0]), np.array([0.0, 1.0, 0.0]))
         closing.configure("closing_axis", "soft", 0.0)
         prefix = side[0] + "_"
-        held = {n: float(robot.get_joint(n)) for n in self._names
-                if n not in humanoid_v1.LEG_JOINTS and not n.startswith(prefix)}  # fmt: skip
+        held = {
+            n: float(robot.get_joint(n))
+            for n in self._names
+            if n not in humanoid_v1.LEG_JOINTS and not n.startswith(prefix)
+        }
         others = solver.add_joints_task()
         others.set_joints(held)
         others.configure("others", "soft", _WEIGHTS["others"])
@@ -127,8 +130,9 @@ class ReachIK:
         for name, value in zip(self._names, joints, strict=True):
             self.robot.set_joint(name, float(value))
 
-    def solve(self, hand_target: np.ndarray, trunk_height: float, orientation_weight: float,
-              gripper: float) -> np.ndarray:  # fmt: skip
+    def solve(
+        self, hand_target: np.ndarray, trunk_height: float, orientation_weight: float, gripper: float
+    ) -> np.ndarray:
         """One tick towards the hand at `hand_target` (feet frame) with the trunk at `trunk_height`; the
         closing-axis task at `orientation_weight` (ramped in by the caller: switching it on at once saturates the
         servos). Returns joint targets in JOINT_NAMES order, with the hand's gripper at `gripper` (m open)."""

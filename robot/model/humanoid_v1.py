@@ -150,53 +150,93 @@ def _add_gripper(spec: mujoco.MjSpec, side: str) -> None:
     wrist = forearm.add_body(name=f"{s}_wrist_link", pos=[FOREARM_X, out * WRIST_POS_Y, 0.0])
     wrist.add_joint(name=f"{s}_wrist", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[1, 0, 0])
     # The wrist servo (one XM430) and the palm that carries the gripper servo.
-    wrist.add_geom(name=f"{s}_wrist_servo", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.014, 0.012, 0.017],
-                   pos=[0, out * 0.010, 0], mass=WRIST_MASS, rgba=[0.2, 0.2, 0.2, 1],
-                   group=GRIPPER_GEOM_GROUP)  # fmt: skip
+    wrist.add_geom(
+        name=f"{s}_wrist_servo",
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=[0.014, 0.012, 0.017],
+        pos=[0, out * 0.010, 0],
+        mass=WRIST_MASS,
+        rgba=[0.2, 0.2, 0.2, 1],
+        group=GRIPPER_GEOM_GROUP,
+    )
     palm_y = out * (0.022 + PALM_HALF[1])
-    wrist.add_geom(name=f"{s}_palm", type=mujoco.mjtGeom.mjGEOM_BOX, size=list(PALM_HALF),
-                   pos=[0, palm_y, 0], mass=PALM_MASS, rgba=[0.25, 0.25, 0.28, 1],
-                   group=GRIPPER_GEOM_GROUP)  # fmt: skip
+    wrist.add_geom(
+        name=f"{s}_palm",
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=list(PALM_HALF),
+        pos=[0, palm_y, 0],
+        mass=PALM_MASS,
+        rgba=[0.25, 0.25, 0.28, 1],
+        group=GRIPPER_GEOM_GROUP,
+    )
     finger_y = palm_y + out * (PALM_HALF[1] + FINGER_HALF[1] - 0.006)
     for finger, sign in (("a", 1.0), ("b", -1.0)):
         body = wrist.add_body(name=f"{s}_finger_{finger}", pos=[0, finger_y, 0])
-        body.add_joint(name=f"{s}_grip" if finger == "a" else f"{s}_grip_mimic", type=mujoco.mjtJoint.mjJNT_SLIDE,
-                       axis=[0, 0, sign], range=[0, FINGER_TRAVEL], limited=mujoco.mjtLimited.mjLIMITED_TRUE,
-                       damping=2.0, armature=0.01)  # fmt: skip
-        body.add_geom(name=f"{s}_finger_{finger}_pad", type=mujoco.mjtGeom.mjGEOM_BOX, size=list(FINGER_HALF),
-                      pos=[0, 0, sign * FINGER_HALF[2]], mass=FINGER_MASS, friction=list(FINGER_FRICTION),
-                      condim=4, rgba=[0.85, 0.45, 0.1, 1], group=GRIPPER_GEOM_GROUP)  # fmt: skip
+        body.add_joint(
+            name=f"{s}_grip" if finger == "a" else f"{s}_grip_mimic",
+            type=mujoco.mjtJoint.mjJNT_SLIDE,
+            axis=[0, 0, sign],
+            range=[0, FINGER_TRAVEL],
+            limited=mujoco.mjtLimited.mjLIMITED_TRUE,
+            damping=2.0,
+            armature=0.01,
+        )
+        body.add_geom(
+            name=f"{s}_finger_{finger}_pad",
+            type=mujoco.mjtGeom.mjGEOM_BOX,
+            size=list(FINGER_HALF),
+            pos=[0, 0, sign * FINGER_HALF[2]],
+            mass=FINGER_MASS,
+            friction=list(FINGER_FRICTION),
+            condim=4,
+            rgba=[0.85, 0.45, 0.1, 1],
+            group=GRIPPER_GEOM_GROUP,
+        )
     wrist.add_site(name=HAND_FRAMES[side], pos=[0, finger_y + out * 0.006, 0])
     spec.add_equality(type=mujoco.mjtEq.mjEQ_JOINT, name1=f"{s}_grip_mimic", name2=f"{s}_grip")
 
 
 def _add_servo_actuator(spec: mujoco.MjSpec, joint: str) -> None:
-    spec.add_actuator(name=f"{joint}_act", target=joint, trntype=mujoco.mjtTrn.mjTRN_JOINT,
-                      gainprm=[POSITION_KP_NM_PER_RAD] + [0] * 9, biasprm=[0, -POSITION_KP_NM_PER_RAD] + [0] * 8,
-                      biastype=mujoco.mjtBias.mjBIAS_AFFINE, ctrlrange=[-math.pi, math.pi],
-                      forcerange=[-SERVO_STALL_TORQUE_NM, SERVO_STALL_TORQUE_NM],
-                      forcelimited=mujoco.mjtLimited.mjLIMITED_TRUE)  # fmt: skip
+    spec.add_actuator(
+        name=f"{joint}_act",
+        target=joint,
+        trntype=mujoco.mjtTrn.mjTRN_JOINT,
+        gainprm=[POSITION_KP_NM_PER_RAD] + [0] * 9,
+        biasprm=[0, -POSITION_KP_NM_PER_RAD] + [0] * 8,
+        biastype=mujoco.mjtBias.mjBIAS_AFFINE,
+        ctrlrange=[-math.pi, math.pi],
+        forcerange=[-SERVO_STALL_TORQUE_NM, SERVO_STALL_TORQUE_NM],
+        forcelimited=mujoco.mjtLimited.mjLIMITED_TRUE,
+    )
 
 
 def _add_grip_actuator(spec: mujoco.MjSpec, joint: str) -> None:
     """The gripper servo, modelled as a stiff position drive on the finger slide, force-limited like the prototype's."""
-    spec.add_actuator(name=f"{joint}_act", target=joint, trntype=mujoco.mjtTrn.mjTRN_JOINT,
-                      gainprm=[GRIP_KP_N_PER_M] + [0] * 9, biasprm=[0, -GRIP_KP_N_PER_M] + [0] * 8,
-                      biastype=mujoco.mjtBias.mjBIAS_AFFINE, ctrlrange=[0, FINGER_TRAVEL],
-                      ctrllimited=mujoco.mjtLimited.mjLIMITED_TRUE, forcerange=[-GRIP_FORCE_N / 2, GRIP_FORCE_N / 2],
-                      forcelimited=mujoco.mjtLimited.mjLIMITED_TRUE)  # fmt: skip
+    spec.add_actuator(
+        name=f"{joint}_act",
+        target=joint,
+        trntype=mujoco.mjtTrn.mjTRN_JOINT,
+        gainprm=[GRIP_KP_N_PER_M] + [0] * 9,
+        biasprm=[0, -GRIP_KP_N_PER_M] + [0] * 8,
+        biastype=mujoco.mjtBias.mjBIAS_AFFINE,
+        ctrlrange=[0, FINGER_TRAVEL],
+        ctrllimited=mujoco.mjtLimited.mjLIMITED_TRUE,
+        forcerange=[-GRIP_FORCE_N / 2, GRIP_FORCE_N / 2],
+        forcelimited=mujoco.mjtLimited.mjLIMITED_TRUE,
+    )
 
 
 def _add_sensors(spec: mujoco.MjSpec) -> None:
     """IMU in the trunk; four force-sensing pads under each sole (their sum and centre give the foot's CoP)."""
     trunk = spec.body(TRUNK_BODY)
     trunk.add_site(name="imu", pos=[0, 0, 0])
-    spec.add_sensor(name="imu_gyro", type=mujoco.mjtSensor.mjSENS_GYRO, objtype=mujoco.mjtObj.mjOBJ_SITE,
-                    objname="imu")  # fmt: skip
-    spec.add_sensor(name="imu_accel", type=mujoco.mjtSensor.mjSENS_ACCELEROMETER, objtype=mujoco.mjtObj.mjOBJ_SITE,
-                    objname="imu")  # fmt: skip
-    spec.add_sensor(name="imu_quat", type=mujoco.mjtSensor.mjSENS_FRAMEQUAT, objtype=mujoco.mjtObj.mjOBJ_SITE,
-                    objname="imu")  # fmt: skip
+    spec.add_sensor(name="imu_gyro", type=mujoco.mjtSensor.mjSENS_GYRO, objtype=mujoco.mjtObj.mjOBJ_SITE, objname="imu")
+    spec.add_sensor(
+        name="imu_accel", type=mujoco.mjtSensor.mjSENS_ACCELEROMETER, objtype=mujoco.mjtObj.mjOBJ_SITE, objname="imu"
+    )
+    spec.add_sensor(
+        name="imu_quat", type=mujoco.mjtSensor.mjSENS_FRAMEQUAT, objtype=mujoco.mjtObj.mjOBJ_SITE, objname="imu"
+    )
     for side, body_name in FOOT_BODIES.items():
         out = 1.0 if side == "left" else -1.0
         foot = spec.body(body_name)
@@ -204,10 +244,15 @@ def _add_sensors(spec: mujoco.MjSpec) -> None:
         foot.add_site(name=FOOT_FRAMES[side], pos=[SOLE_CENTRE_X, cy, SOLE_Z])
         for i, (dx, dy) in enumerate(((1, 1), (1, -1), (-1, 1), (-1, -1))):
             name = f"{side}_foot_fsr{i}"
-            foot.add_site(name=name, type=mujoco.mjtGeom.mjGEOM_BOX, size=[FOOT_LENGTH / 4, 0.02, 0.008],
-                          pos=[SOLE_CENTRE_X + dx * FOOT_LENGTH / 4, cy + dy * 0.02, SOLE_Z])  # fmt: skip
-            spec.add_sensor(name=name, type=mujoco.mjtSensor.mjSENS_TOUCH, objtype=mujoco.mjtObj.mjOBJ_SITE,
-                            objname=name)  # fmt: skip
+            foot.add_site(
+                name=name,
+                type=mujoco.mjtGeom.mjGEOM_BOX,
+                size=[FOOT_LENGTH / 4, 0.02, 0.008],
+                pos=[SOLE_CENTRE_X + dx * FOOT_LENGTH / 4, cy + dy * 0.02, SOLE_Z],
+            )
+            spec.add_sensor(
+                name=name, type=mujoco.mjtSensor.mjSENS_TOUCH, objtype=mujoco.mjtObj.mjOBJ_SITE, objname=name
+            )
 
 
 def _add_perception_sensors(spec: mujoco.MjSpec) -> None:
@@ -216,8 +261,9 @@ def _add_perception_sensors(spec: mujoco.MjSpec) -> None:
     vertical_fov = 2.0 * math.degrees(
         math.atan(math.tan(math.radians(CAMERA_HFOV_DEG / 2.0)) * CAMERA_HEIGHT / CAMERA_WIDTH)
     )
-    spec.body(HEAD_CAMERA_BODY).add_camera(name=HEAD_CAMERA, pos=list(CAMERA_POS), xyaxes=[0, -1, 0, 0, 0, 1],
-                                           fovy=vertical_fov)  # fmt: skip
+    spec.body(HEAD_CAMERA_BODY).add_camera(
+        name=HEAD_CAMERA, pos=list(CAMERA_POS), xyaxes=[0, -1, 0, 0, 0, 1], fovy=vertical_fov
+    )
     spec.body(TRUNK_BODY).add_site(name=LIDAR_SITE, pos=list(LIDAR_POS), group=4)
 
 
@@ -292,8 +338,9 @@ def placo_mjcf() -> str:
     spec.body("l_hip_yaw_link").add_body(name="left_hip_yaw", mass=FRAME_MASS, inertia=[FRAME_INERTIA] * 3)
     spec.body("head_pan_link").add_body(name="head_base", mass=FRAME_MASS, inertia=[FRAME_INERTIA] * 3)
     spec.body(HEAD_CAMERA_BODY).add_body(name="head_pitch", mass=FRAME_MASS, inertia=[FRAME_INERTIA] * 3)
-    spec.body(HEAD_CAMERA_BODY).add_body(name="camera", pos=list(CAMERA_POS), mass=FRAME_MASS,
-                                         inertia=[FRAME_INERTIA] * 3)  # fmt: skip
+    spec.body(HEAD_CAMERA_BODY).add_body(
+        name="camera", pos=list(CAMERA_POS), mass=FRAME_MASS, inertia=[FRAME_INERTIA] * 3
+    )
     return spec.to_xml()
 
 

@@ -41,8 +41,11 @@ def _add_box(parent: mujoco.MjsBody, box: Box) -> None:
 
 def _add_object(spec: mujoco.MjSpec, obj: WorldObject) -> None:
     x, y, z = obj.position
-    body = spec.worldbody.add_body(name=object_body_name(obj.name), pos=[x, y, z + 0.001],
-                                   quat=[math.cos(obj.yaw / 2), 0.0, 0.0, math.sin(obj.yaw / 2)])  # fmt: skip
+    body = spec.worldbody.add_body(
+        name=object_body_name(obj.name),
+        pos=[x, y, z + 0.001],
+        quat=[math.cos(obj.yaw / 2), 0.0, 0.0, math.sin(obj.yaw / 2)],
+    )
     body.add_freejoint(name=object_body_name(obj.name) + "_free")
     rgba = list(obj.rgba)
     friction = [1.0, 0.01, 0.0001]
@@ -56,9 +59,15 @@ def _add_object(spec: mujoco.MjSpec, obj: WorldObject) -> None:
             friction=friction,
             condim=4,
         )
-        body.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.003, 0.006, obj.height * 0.3],
-                      pos=[obj.radius + 0.006, 0, obj.height / 2], mass=obj.mass * 0.15, rgba=rgba,
-                      friction=friction, condim=4)  # the handle, along +x  # fmt: skip
+        body.add_geom(
+            type=mujoco.mjtGeom.mjGEOM_BOX,
+            size=[0.003, 0.006, obj.height * 0.3],
+            pos=[obj.radius + 0.006, 0, obj.height / 2],
+            mass=obj.mass * 0.15,
+            rgba=rgba,
+            friction=friction,
+            condim=4,
+        )  # the handle, along +x
     elif obj.shape == "bottle":
         body.add_geom(
             type=mujoco.mjtGeom.mjGEOM_CYLINDER,
@@ -79,8 +88,15 @@ def _add_object(spec: mujoco.MjSpec, obj: WorldObject) -> None:
             condim=4,
         )
     else:
-        body.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[obj.radius, 0, 0], pos=[0, 0, obj.radius],
-                      mass=obj.mass, rgba=rgba, friction=friction, condim=4)  # fmt: skip
+        body.add_geom(
+            type=mujoco.mjtGeom.mjGEOM_SPHERE,
+            size=[obj.radius, 0, 0],
+            pos=[0, 0, obj.radius],
+            mass=obj.mass,
+            rgba=rgba,
+            friction=friction,
+            condim=4,
+        )
 
 
 def build_scene_spec(layout: WorldLayout) -> mujoco.MjSpec:
@@ -95,15 +111,22 @@ def build_scene_spec(layout: WorldLayout) -> mujoco.MjSpec:
     world.add_light(
         pos=[0, 0, 3], dir=[0, 0, -1], type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL, diffuse=[0.6, 0.6, 0.6]
     )
-    world.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[ROOM_X + 0.5, ROOM_Y + 0.5, 0.05],
-                   rgba=[0.78, 0.74, 0.68, 1.0])  # fmt: skip
+    world.add_geom(
+        name="floor",
+        type=mujoco.mjtGeom.mjGEOM_PLANE,
+        size=[ROOM_X + 0.5, ROOM_Y + 0.5, 0.05],
+        rgba=[0.78, 0.74, 0.68, 1.0],
+    )
     for box in (*layout.walls, *layout.furniture, *layout.obstacles):
         _add_box(world, box)
     for obj in layout.objects:
         _add_object(spec, obj)
     for i in range(SPARE_OBSTACLES):
-        body = world.add_body(name=spare_obstacle_name(i), mocap=True,
-                              pos=[SPARE_PARKING[0] + i, SPARE_PARKING[1], SPARE_OBSTACLE_HALF[2]])  # fmt: skip
+        body = world.add_body(
+            name=spare_obstacle_name(i),
+            mocap=True,
+            pos=[SPARE_PARKING[0] + i, SPARE_PARKING[1], SPARE_OBSTACLE_HALF[2]],
+        )
         body.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=list(SPARE_OBSTACLE_HALF), rgba=[0.8, 0.3, 0.6, 1.0])
 
     x, y, yaw = layout.robot_start

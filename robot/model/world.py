@@ -161,13 +161,28 @@ def _places(counter_item_y: float) -> tuple[Place, ...]:
     front = KITCHEN_COUNTER.x - KITCHEN_COUNTER.half_x
     table_front = LIVING_TABLE.y - LIVING_TABLE.half_y
     return (
-        Place("kitchen counter", ("counter", "kitchen", "kitchen counter"), KITCHEN_COUNTER,
-              (front - 0.12, counter_item_y, 0.0), (front - STAGING_DISTANCE, counter_item_y)),
-        Place("living-room table", ("table", "living room table", "living room", "coffee table"), LIVING_TABLE,
-              (LIVING_TABLE.x, table_front - 0.12, math.pi / 2), (LIVING_TABLE.x, table_front - STAGING_DISTANCE)),
-        Place("charging dock", ("dock", "charger", "charging station", "charging dock", "base"), DOCK_PAD,
-              (DOCK_PAD.x, DOCK_PAD.y, 0.0), (DOCK_PAD.x, DOCK_PAD.y)),
-    )  # fmt: skip
+        Place(
+            "kitchen counter",
+            ("counter", "kitchen", "kitchen counter"),
+            KITCHEN_COUNTER,
+            (front - 0.12, counter_item_y, 0.0),
+            (front - STAGING_DISTANCE, counter_item_y),
+        ),
+        Place(
+            "living-room table",
+            ("table", "living room table", "living room", "coffee table"),
+            LIVING_TABLE,
+            (LIVING_TABLE.x, table_front - 0.12, math.pi / 2),
+            (LIVING_TABLE.x, table_front - STAGING_DISTANCE),
+        ),
+        Place(
+            "charging dock",
+            ("dock", "charger", "charging station", "charging dock", "base"),
+            DOCK_PAD,
+            (DOCK_PAD.x, DOCK_PAD.y, 0.0),
+            (DOCK_PAD.x, DOCK_PAD.y),
+        ),
+    )
 
 
 def _place_counter_objects(rng: np.random.Generator, handles: np.random.Generator) -> list[WorldObject]:
@@ -188,9 +203,20 @@ def _place_counter_objects(rng: np.random.Generator, handles: np.random.Generato
         x = front + rng.uniform(0.06, 0.12)
         yaw = float(handles.uniform(-math.pi / 6, math.pi / 6))
         objects.append(
-            WorldObject(name, aliases, colour, shape, rgba, mass, radius, height, "kitchen counter",
-                        (float(x), float(y), KITCHEN_COUNTER.height), yaw)
-        )  # fmt: skip
+            WorldObject(
+                name,
+                aliases,
+                colour,
+                shape,
+                rgba,
+                mass,
+                radius,
+                height,
+                "kitchen counter",
+                (float(x), float(y), KITCHEN_COUNTER.height),
+                yaw,
+            )
+        )
     return objects
 
 
@@ -205,8 +231,15 @@ def _random_obstacles(rng: np.random.Generator, count: int, keep_clear: list[tup
         x = rng.uniform(-ROOM_X + hx + 0.05, ROOM_X - hx - 0.05)
         y = rng.uniform(-ROOM_Y + hy + 0.05, ROOM_Y - hy - 0.05)
         height = float(rng.uniform(OBSTACLE_MIN_HEIGHT, 0.35))
-        candidate = Box(names[len(obstacles) % len(names)] + f"_{len(obstacles)}", float(x), float(y), float(hx),
-                        float(hy), height, colours[len(obstacles) % len(colours)])  # fmt: skip
+        candidate = Box(
+            names[len(obstacles) % len(names)] + f"_{len(obstacles)}",
+            float(x),
+            float(y),
+            float(hx),
+            float(hy),
+            height,
+            colours[len(obstacles) % len(colours)],
+        )
         blocked = [KITCHEN_COUNTER, LIVING_TABLE, DOCK_PAD, *obstacles, *_walls()]
         if any(_boxes_overlap(candidate, b, 0.1) for b in blocked):
             continue

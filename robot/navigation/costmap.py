@@ -27,8 +27,7 @@ class Costmap:
     def from_map(grid: OccupancyMap, inflate_m: float) -> Costmap:
         data = np.frombuffer(grid.data, dtype=np.int8).reshape(grid.height, grid.width).T
         occupied = data >= OCCUPIED_PERCENT
-        return Costmap(inflate(occupied, inflate_m / grid.resolution), grid.origin[0], grid.origin[1],
-                       grid.resolution)  # fmt: skip
+        return Costmap(inflate(occupied, inflate_m / grid.resolution), grid.origin[0], grid.origin[1], grid.resolution)
 
     def cell(self, x: float, y: float) -> tuple[int, int]:
         return int(np.floor((x - self.x0) / self.resolution)), int(np.floor((y - self.y0) / self.resolution))

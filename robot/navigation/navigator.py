@@ -145,8 +145,13 @@ class NavigationReport:
     path: tuple[tuple[float, float], ...] = ()
 
 
-def plan_path(costmap: Costmap, start: tuple[float, float], goal: tuple[float, float],
-              facing: float | None = None, roomy: Costmap | None = None) -> list[tuple[float, float]]:  # fmt: skip
+def plan_path(
+    costmap: Costmap,
+    start: tuple[float, float],
+    goal: tuple[float, float],
+    facing: float | None = None,
+    roomy: Costmap | None = None,
+) -> list[tuple[float, float]]:
     """A path of points from start to goal on the costmap (ends moved to the nearest free cells), or raise. With
     `facing`, the path ends with a straight lead-in along that heading where one fits (a lead-in from the other
     side of the goal, or one that makes a long detour, is not worth it). `roomy`, the map grown wider: the path
@@ -168,8 +173,9 @@ def plan_path(costmap: Costmap, start: tuple[float, float], goal: tuple[float, f
     return direct
 
 
-def _shortest_path(costmap: Costmap, start: tuple[float, float], goal: tuple[float, float],
-                   roomy: Costmap | None = None) -> list[tuple[float, float]]:  # fmt: skip
+def _shortest_path(
+    costmap: Costmap, start: tuple[float, float], goal: tuple[float, float], roomy: Costmap | None = None
+) -> list[tuple[float, float]]:
     usual = _shortest_path_on(costmap, start, goal)
     if roomy is None:
         return usual
@@ -184,8 +190,9 @@ def _shortest_path(costmap: Costmap, start: tuple[float, float], goal: tuple[flo
     return path
 
 
-def _shortest_path_on(costmap: Costmap, start: tuple[float, float],
-                      goal: tuple[float, float]) -> list[tuple[float, float]]:  # fmt: skip
+def _shortest_path_on(
+    costmap: Costmap, start: tuple[float, float], goal: tuple[float, float]
+) -> list[tuple[float, float]]:
     ends = nearest_free(costmap.blocked, costmap.cell(*start)), nearest_free(costmap.blocked, costmap.cell(*goal))
     if None in ends:
         raise NavigationFailed(f"path blocked: no free space near ({goal[0]:.2f}, {goal[1]:.2f})")
@@ -243,8 +250,9 @@ def _path_length(points: list[tuple[float, float]]) -> float:
     return sum(math.dist(a, b) for a, b in itertools.pairwise(points))
 
 
-def arrival_point(staging: tuple[float, float], pose: tuple[float, float, float] | None,
-                  blocked_at: Callable[[float, float], bool]) -> tuple[float, float]:  # fmt: skip
+def arrival_point(
+    staging: tuple[float, float], pose: tuple[float, float, float] | None, blocked_at: Callable[[float, float], bool]
+) -> tuple[float, float]:
     """Where a path to `staging` should end to leave only a straight walk ahead onto the approach `pose`: the point
     of the staging line (through `staging`, across the pose's heading) right behind the pose, when that point is
     free; else `staging` itself."""
@@ -294,10 +302,15 @@ DRIFT_LEARNING_RATE = 0.5
 
 
 class Navigator:
-    def __init__(self, body: NavBody, sim_time: Callable[[], float],
-                 on_update: Callable[[NavigationState], None] | None = None,
-                 stop_drift: StopDrift | None = None, clearance_m: float = CLEARANCE_M,
-                 open_speed_m_s: float = OPEN_M_S) -> None:  # fmt: skip
+    def __init__(
+        self,
+        body: NavBody,
+        sim_time: Callable[[], float],
+        on_update: Callable[[NavigationState], None] | None = None,
+        stop_drift: StopDrift | None = None,
+        clearance_m: float = CLEARANCE_M,
+        open_speed_m_s: float = OPEN_M_S,
+    ) -> None:
         """`stop_drift` is shared by the navigations of one robot (what one stop taught serves the next).
         `clearance_m`: the berth its paths keep from obstacles where there is room, beyond the footprint (a robot
         carrying something needs CARRYING_CLEARANCE_M); CLEARANCE_M at least. `open_speed_m_s`: the speed in the open
@@ -310,9 +323,13 @@ class Navigator:
         self._on_update = on_update or (lambda state: None)
         self._goal: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
-    def go(self, staging: tuple[float, float],
-           approach: tuple[float, float, float] | Callable[[], tuple[float, float, float]] | None = None,
-           good_stop: Callable[[], bool] | None = None, back_away_m: float = 0.0) -> NavigationReport:  # fmt: skip
+    def go(
+        self,
+        staging: tuple[float, float],
+        approach: tuple[float, float, float] | Callable[[], tuple[float, float, float]] | None = None,
+        good_stop: Callable[[], bool] | None = None,
+        back_away_m: float = 0.0,
+    ) -> NavigationReport:
         """Walk a planned path to `staging`, then straight onto the `approach` pose if one is given (a callable is
         asked at the staging point: what the robot sees from there may decide where it stands). `good_stop` is the
         caller's own judgement of where the robot came to rest (a work pose: the object in the arm's reach): a stop
@@ -350,8 +367,9 @@ class Navigator:
         report.sim_s = self._now() - started
         return report
 
-    def step_to(self, goal: tuple[float, float, float], settle_m: float = SETTLED_M,
-                good_stop: Callable[[], bool] | None = None) -> NavigationReport:  # fmt: skip
+    def step_to(
+        self, goal: tuple[float, float, float], settle_m: float = SETTLED_M, good_stop: Callable[[], bool] | None = None
+    ) -> NavigationReport:
         """A short straight walk onto a pose, without planning (adjusting the stance at a counter: from right in
         front of furniture the map puts the robot inside the furniture's grown footprint, where A* cannot start)."""
         report = NavigationReport()
@@ -387,8 +405,13 @@ class Navigator:
             body.drive(-BACK_AWAY_M_S, 0.0, heading)
             body.wait(CONTROL_PERIOD_S)
 
-    def _plan(self, goal: tuple[float, float], facing: float | None, start: tuple[float, float] | None = None,
-              clearance_m: float | None = None) -> list[tuple[float, float]]:  # fmt: skip
+    def _plan(
+        self,
+        goal: tuple[float, float],
+        facing: float | None,
+        start: tuple[float, float] | None = None,
+        clearance_m: float | None = None,
+    ) -> list[tuple[float, float]]:
         """A path from `start` (where the robot is, if not given) to `goal` on the current map, or raise; keeping
         `clearance_m` (the navigator's own if not given) where there is room."""
         costmap = self._costmap()
@@ -408,9 +431,14 @@ class Navigator:
             raise NavigationFailed(f"no map yet: the lidar has not produced one in {FIRST_MAP_WAIT_S:.0f} s")
         return costmap
 
-    def _follow_path(self, goal: tuple[float, float], facing: float | None, report: NavigationReport,
-                     stop_at_end: bool = True,
-                     retarget: Callable[[], tuple[float, float]] | None = None) -> None:  # fmt: skip
+    def _follow_path(
+        self,
+        goal: tuple[float, float],
+        facing: float | None,
+        report: NavigationReport,
+        stop_at_end: bool = True,
+        retarget: Callable[[], tuple[float, float]] | None = None,
+    ) -> None:
         """Follow a planned path to `goal` (arriving along `facing` if given), replanning when the map shows the path
         blocked, or when `retarget` (asked on the way) moves the goal (see RETARGET_M)."""
         body = self.body
@@ -495,8 +523,9 @@ class Navigator:
         return self.open_speed_m_s / MAX_FORWARD_M_S
 
     @staticmethod
-    def _moved_goal(goal: tuple[float, float], retarget: Callable[[], tuple[float, float]] | None,
-                    remaining_m: float) -> tuple[float, float] | None:  # fmt: skip
+    def _moved_goal(
+        goal: tuple[float, float], retarget: Callable[[], tuple[float, float]] | None, remaining_m: float
+    ) -> tuple[float, float] | None:
         """The path's new end, if `retarget` moved it far enough while enough of the path is left to follow it."""
         if retarget is None or remaining_m < RETARGET_MIN_REMAINING_M:
             return None
@@ -521,8 +550,9 @@ class Navigator:
             body.drive(STEP_CLEAR_M_S * ahead, STEP_CLEAR_M_S * left, 0.0)
             body.wait(CONTROL_PERIOD_S)
 
-    def _replan(self, start: tuple[float, float], goal: tuple[float, float],
-                facing: float | None) -> list[tuple[float, float]]:  # fmt: skip
+    def _replan(
+        self, start: tuple[float, float], goal: tuple[float, float], facing: float | None
+    ) -> list[tuple[float, float]]:
         """A new path, found without breaking stride when the map has one (a stop and a restart cost about 3 s);
         otherwise stop and wait for the way to clear."""
         try:
@@ -531,8 +561,9 @@ class Navigator:
             self._stop()
             return self._plan_or_wait(start, goal, facing)
 
-    def _plan_or_wait(self, start: tuple[float, float], goal: tuple[float, float],
-                      facing: float | None) -> list[tuple[float, float]]:  # fmt: skip
+    def _plan_or_wait(
+        self, start: tuple[float, float], goal: tuple[float, float], facing: float | None
+    ) -> list[tuple[float, float]]:
         """A path now, or after waiting a little for the way to clear (a person passing), or raise."""
         deadline = self._now() + BLOCKED_WAIT_S
         while True:
@@ -543,8 +574,13 @@ class Navigator:
                     raise
                 self.body.wait(0.5)
 
-    def _approach(self, goal: tuple[float, float, float], report: NavigationReport,
-                  settle_m: float = SETTLED_M, good_stop: Callable[[], bool] | None = None) -> None:  # fmt: skip
+    def _approach(
+        self,
+        goal: tuple[float, float, float],
+        report: NavigationReport,
+        settle_m: float = SETTLED_M,
+        good_stop: Callable[[], bool] | None = None,
+    ) -> None:
         """Walk the last stretch slowly and stop on the goal pose. Stopping takes two steps in place, which move the
         robot a few cm (more when it carries something): once stopped within `settle_m` and SETTLED_RAD, or where
         `good_stop` accepts (turned up to WORK_SETTLED_RAD), it has arrived; further off, it walks again, and each

@@ -98,8 +98,9 @@ class ObjectDetector:
         self.models = tuple(models)
         self._depth_noise = depth_noise_per_m2
 
-    def detect(self, rgb: np.ndarray, depth: np.ndarray, intrinsics: PinholeIntrinsics,
-               world_from_camera: np.ndarray) -> list[Detection]:  # fmt: skip
+    def detect(
+        self, rgb: np.ndarray, depth: np.ndarray, intrinsics: PinholeIntrinsics, world_from_camera: np.ndarray
+    ) -> list[Detection]:
         """Every known object found in the image, best first."""
         hsv = cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)
         saturated = (hsv[:, :, 1] >= MIN_SATURATION) & (hsv[:, :, 2] >= MIN_VALUE) & (depth > 0)
@@ -110,20 +111,30 @@ class ObjectDetector:
             mask = saturated & _hue_mask(hsv[:, :, 0], HUE_RANGES.get(colour, ()))
             for pixels in _blobs(mask, depth, intrinsics, world_from_camera):
                 vs, us = pixels
-                if vs.min() < BORDER_PX or us.min() < BORDER_PX or vs.max() >= height - BORDER_PX or \
-                        us.max() >= width - BORDER_PX:  # fmt: skip
+                if (
+                    vs.min() < BORDER_PX
+                    or us.min() < BORDER_PX
+                    or vs.max() >= height - BORDER_PX
+                    or us.max() >= width - BORDER_PX
+                ):
                     continue
                 hue = _median_hue(hsv[vs, us, 0])
-                detection = self._identify(colour, hue, pixels, depth, intrinsics, world_from_camera,
-                                           camera_position)  # fmt: skip
+                detection = self._identify(colour, hue, pixels, depth, intrinsics, world_from_camera, camera_position)
                 if detection is not None:
                     detections.append(detection)
         detections.sort(key=lambda d: -d.confidence)
         return _one_per_label(detections)
 
-    def _identify(self, colour: str, hue: float, pixels: tuple[np.ndarray, np.ndarray], depth: np.ndarray,
-                  intrinsics: PinholeIntrinsics, world_from_camera: np.ndarray,
-                  camera_position: np.ndarray) -> Detection | None:  # fmt: skip
+    def _identify(
+        self,
+        colour: str,
+        hue: float,
+        pixels: tuple[np.ndarray, np.ndarray],
+        depth: np.ndarray,
+        intrinsics: PinholeIntrinsics,
+        world_from_camera: np.ndarray,
+        camera_position: np.ndarray,
+    ) -> Detection | None:
         vs, us = pixels
         camera_points = intrinsics.back_project(us.astype(float), vs.astype(float), depth[vs, us])
         points = _to_world(camera_points, world_from_camera)
@@ -170,8 +181,9 @@ def _hue_mask(hue: np.ndarray, ranges: Sequence[tuple[int, int]]) -> np.ndarray:
     return mask
 
 
-def _blobs(mask: np.ndarray, depth: np.ndarray, intrinsics: PinholeIntrinsics,
-           world_from_camera: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:  # fmt: skip
+def _blobs(
+    mask: np.ndarray, depth: np.ndarray, intrinsics: PinholeIntrinsics, world_from_camera: np.ndarray
+) -> list[tuple[np.ndarray, np.ndarray]]:
     """Pixel index arrays (rows, cols) of each object candidate: connected blobs, fragments merged in 3D."""
     count, labels, stats, _ = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=8)
     fragments: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []

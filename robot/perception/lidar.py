@@ -48,8 +48,9 @@ class LaserScan:
 
 
 class SimLidar:
-    def __init__(self, model: mujoco.MjModel, beams: int = BEAMS, noise_m: float = RANGE_NOISE_M,
-                 seed: int = 0) -> None:  # fmt: skip
+    def __init__(
+        self, model: mujoco.MjModel, beams: int = BEAMS, noise_m: float = RANGE_NOISE_M, seed: int = 0
+    ) -> None:
         self._model = model
         self._site = model.site(humanoid_v1.LIDAR_SITE).id
         self._angles = -math.pi + (2.0 * math.pi / beams) * np.arange(beams)
@@ -65,11 +66,30 @@ class SimLidar:
         heading = math.atan2(rotation[1, 0], rotation[0, 0])
         world_angles = self._angles + heading
         directions = np.stack([np.cos(world_angles), np.sin(world_angles), np.zeros_like(world_angles)], axis=-1)
-        mujoco.mj_multiRay(self._model, data, origin, directions.ravel(), WORLD_ONLY, 1, -1, self._geomid,
-                           self._dist, None, len(self._angles), RANGE_MAX_M)  # fmt: skip
+        mujoco.mj_multiRay(
+            self._model,
+            data,
+            origin,
+            directions.ravel(),
+            WORLD_ONLY,
+            1,
+            -1,
+            self._geomid,
+            self._dist,
+            None,
+            len(self._angles),
+            RANGE_MAX_M,
+        )
         ranges = self._dist.copy()
         if self._noise > 0:
             ranges += self._rng.standard_normal(len(ranges)) * self._noise
         ranges[(self._geomid < 0) | (self._dist < 0) | (ranges < RANGE_MIN_M) | (ranges > RANGE_MAX_M)] = np.inf
-        return LaserScan(float(data.time), float(self._angles[0]), float(self._angles[1] - self._angles[0]),
-                         RANGE_MIN_M, RANGE_MAX_M, ranges.astype(np.float32), float(origin[2]))  # fmt: skip
+        return LaserScan(
+            float(data.time),
+            float(self._angles[0]),
+            float(self._angles[1] - self._angles[0]),
+            RANGE_MIN_M,
+            RANGE_MAX_M,
+            ranges.astype(np.float32),
+            float(origin[2]),
+        )

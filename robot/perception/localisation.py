@@ -119,8 +119,12 @@ class ScanMatcher:
         fu, fv = u - i0, v - j0
         inside = (i0 >= 0) & (j0 >= 0) & (i0 < spec.nx - 1) & (j0 < spec.ny - 1)
         i0, j0 = np.where(inside, i0, 0), np.where(inside, j0, 0)
-        value = (field[i0, j0] * (1 - fu) * (1 - fv) + field[i0 + 1, j0] * fu * (1 - fv)
-                 + field[i0, j0 + 1] * (1 - fu) * fv + field[i0 + 1, j0 + 1] * fu * fv)  # fmt: skip
+        value = (
+            field[i0, j0] * (1 - fu) * (1 - fv)
+            + field[i0 + 1, j0] * fu * (1 - fv)
+            + field[i0, j0 + 1] * (1 - fu) * fv
+            + field[i0 + 1, j0 + 1] * fu * fv
+        )
         return np.sum(np.where(inside, value, 0.0), axis=1)
 
     def _remember(self, local: np.ndarray, pose: tuple[float, float, float]) -> None:

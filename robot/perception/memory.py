@@ -31,8 +31,13 @@ class WorldMemory:
                 if detection.confidence < MIN_CONFIDENCE:
                     continue
                 before = self._objects.get(detection.label)
-                known = KnownObject(detection.label, detection.position, self.place_of(detection.position),
-                                    sim_time_s, detection.confidence)  # fmt: skip
+                known = KnownObject(
+                    detection.label,
+                    detection.position,
+                    self.place_of(detection.position),
+                    sim_time_s,
+                    detection.confidence,
+                )
                 self._objects[detection.label] = known
                 if before is None or before.place != known.place:
                     changed.append(known)

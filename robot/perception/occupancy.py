@@ -47,8 +47,10 @@ class GridSpec:
         return GridSpec(x0, y0, nx, ny, resolution)
 
     def cell(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return (np.floor((np.asarray(x) - self.x0) / self.resolution).astype(np.int64),
-                np.floor((np.asarray(y) - self.y0) / self.resolution).astype(np.int64))  # fmt: skip
+        return (
+            np.floor((np.asarray(x) - self.x0) / self.resolution).astype(np.int64),
+            np.floor((np.asarray(y) - self.y0) / self.resolution).astype(np.int64),
+        )
 
     def centres(self) -> tuple[np.ndarray, np.ndarray]:
         xs = self.x0 + self.resolution * (np.arange(self.nx) + 0.5)
@@ -101,8 +103,7 @@ class OccupancyMapper:
         # a return lies on a surface, with the solid behind it: it is counted a little way in (range noise would
         # otherwise put half the returns from a surface on a cell boundary in the free cell before it)
         depth = ranges[hit] + HIT_DEPTH_M
-        occupied = self._cells(x + depth * np.cos(angles[hit]), y + depth * np.sin(angles[hit]),
-                               np.nonzero(hit)[0])  # fmt: skip
+        occupied = self._cells(x + depth * np.cos(angles[hit]), y + depth * np.sin(angles[hit]), np.nonzero(hit)[0])
         # each beam counts once per cell it crosses, and once where it ends: a cell near a surface that some beams
         # cross and others end in (range noise) weighs both
         size = spec.nx * spec.ny

@@ -16,8 +16,16 @@ from typing import Protocol
 from robot.interface import DetectedObject
 
 # Head sweep (pan, tilt) in rad: ahead first, then to each side; then nearer the feet.
-SWEEP = ((0.0, -0.35), (0.75, -0.35), (-0.75, -0.35), (1.35, -0.35), (-1.35, -0.35),
-         (0.0, -0.8), (0.75, -0.8), (-0.75, -0.8))  # fmt: skip
+SWEEP = (
+    (0.0, -0.35),
+    (0.75, -0.35),
+    (-0.75, -0.35),
+    (1.35, -0.35),
+    (-1.35, -0.35),
+    (0.0, -0.8),
+    (0.75, -0.8),
+    (-0.75, -0.8),
+)
 # Body turns between sweeps: the head's +-1.35 rad plus the camera's +-0.76 rad cover about 240 deg per sweep.
 BODY_TURNS = (math.radians(120.0), math.radians(120.0))
 MIN_CONFIDENCE = 0.5
@@ -54,8 +62,9 @@ class SearchResult:
     turned_rad: float
 
 
-def find_object(name: str, body: SearchBody, believed_at: tuple[float, float, float] | None,
-                check_cancelled: Callable[[], None]) -> SearchResult:  # fmt: skip
+def find_object(
+    name: str, body: SearchBody, believed_at: tuple[float, float, float] | None, check_cancelled: Callable[[], None]
+) -> SearchResult:
     """Find `name` (a canonical object name) or raise ObjectNotFound saying where it looked."""
     views = 0
     turned = 0.0

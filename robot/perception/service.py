@@ -192,9 +192,14 @@ class PerceptionService:
                     runner.clear_map()
                 trunk = np.asarray(loco.estimated_trunk, dtype=float)
                 # a fallen robot's pose estimate means nothing: no mapping until it stands again
-                snapshot = SensorSnapshot(state.sim_time_s, np.asarray(state.qpos, dtype=float), trunk[:3], trunk[3:],
-                                          lidar=not state.fallen,
-                                          mocap_positions=np.asarray(state.mocap_positions, dtype=float))  # fmt: skip
+                snapshot = SensorSnapshot(
+                    state.sim_time_s,
+                    np.asarray(state.qpos, dtype=float),
+                    trunk[:3],
+                    trunk[3:],
+                    lidar=not state.fallen,
+                    mocap_positions=np.asarray(state.mocap_positions, dtype=float),
+                )
                 self._absorb(runner.process(snapshot))
         except SensorError as exc:
             self._fail(str(exc))
@@ -205,32 +210,52 @@ class PerceptionService:
 
     def _absorb(self, out: SensorOutput) -> None:
         if self._silenced:
-            out = replace(out, camera=None if "camera" in self._silenced else out.camera,
-                          scan=None if "lidar" in self._silenced else out.scan,
-                          grid=None if "lidar" in self._silenced else out.grid)  # fmt: skip
+            out = replace(
+                out,
+                camera=None if "camera" in self._silenced else out.camera,
+                scan=None if "lidar" in self._silenced else out.scan,
+                grid=None if "lidar" in self._silenced else out.grid,
+            )
         feed = self._feed
         updates: dict[str, object] = {}
         if out.camera is not None:
             frame = out.camera
             detections = tuple(to_detected(d) for d in frame.detections)
             self._camera_rate.tick(frame.sim_time_s)
-            feed = replace(feed, camera=CameraImage(frame.seq, frame.sim_time_s, frame.width, frame.height,
-                                                    frame.jpeg, detections))  # fmt: skip
+            feed = replace(
+                feed, camera=CameraImage(frame.seq, frame.sim_time_s, frame.width, frame.height, frame.jpeg, detections)
+            )
             changed = self.memory.observe(detections, frame.sim_time_s)
             updates["known_objects"] = self.memory.snapshot()
             for known in changed:
                 where = f" on the {known.place}" if known.place and known.place != "floor" else ""
                 x, y, z = known.position
-                self._publish("perception/object_seen", f"saw the {known.name} at ({x:.2f}, {y:.2f}, {z:.2f}){where}",
-                              name=known.name, position=list(known.position), place=known.place)  # fmt: skip
-            updates.update(frame_seq=frame.seq, frame_sim_s=frame.sim_time_s, detections=detections,
-                           frame_ms=sum(out.timings_ms.get(k, 0.0) for k in ("render_ms", "detect_ms", "encode_ms")),
-                           camera_hz=round(self._camera_rate.hz, 2))  # fmt: skip
+                self._publish(
+                    "perception/object_seen",
+                    f"saw the {known.name} at ({x:.2f}, {y:.2f}, {z:.2f}){where}",
+                    name=known.name,
+                    position=list(known.position),
+                    place=known.place,
+                )
+            updates.update(
+                frame_seq=frame.seq,
+                frame_sim_s=frame.sim_time_s,
+                detections=detections,
+                frame_ms=sum(out.timings_ms.get(k, 0.0) for k in ("render_ms", "detect_ms", "encode_ms")),
+                camera_hz=round(self._camera_rate.hz, 2),
+            )
         if out.scan is not None:
             scan = out.scan.scan
             self._lidar_rate.tick(scan.sim_time_s)
-            view = ScanView(scan.sim_time_s, out.scan.pose, scan.height_m, scan.angle_min, scan.angle_increment,
-                            scan.range_max, tuple(float(r) for r in scan.ranges))  # fmt: skip
+            view = ScanView(
+                scan.sim_time_s,
+                out.scan.pose,
+                scan.height_m,
+                scan.angle_min,
+                scan.angle_increment,
+                scan.range_max,
+                tuple(float(r) for r in scan.ranges),
+            )
             feed = replace(feed, scan=view)
             updates["lidar_hz"] = round(self._lidar_rate.hz, 2)
         if out.grid is not None:

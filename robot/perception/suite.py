@@ -119,8 +119,11 @@ class SensorSuite:
         detected = time.perf_counter()
         ok, jpeg = cv2.imencode(".jpg", image.rgb[:, :, ::-1], [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
         encoded = time.perf_counter()
-        timings.update(render_ms=(rendered - started) * 1e3, detect_ms=(detected - rendered) * 1e3,
-                       encode_ms=(encoded - detected) * 1e3)  # fmt: skip
+        timings.update(
+            render_ms=(rendered - started) * 1e3,
+            detect_ms=(detected - rendered) * 1e3,
+            encode_ms=(encoded - detected) * 1e3,
+        )
         self._seq += 1
         return CameraFrame(
             sim_time_s=float(self.data.time),

@@ -79,8 +79,9 @@ class PlanningPipeline:
             if plan is not None:
                 if attempts > 1:
                     notes.append(f"{self.backend}: plan repaired after {attempts - 1} invalid answer(s)")
-                return PlanResult(plan, self.primary.name, self.backend, tuple(notes),
-                                  time.perf_counter() - started, attempts)  # fmt: skip
+                return PlanResult(
+                    plan, self.primary.name, self.backend, tuple(notes), time.perf_counter() - started, attempts
+                )
         if self.fallback is None:
             raise PlanningError("; ".join(notes))
         try:
@@ -90,8 +91,7 @@ class PlanningPipeline:
         except PlanningError as exc:
             raise PlanningError("; ".join([*notes, f"{self.fallback.name} fallback: {exc}"])) from exc
         notes.append(f"planned by {self.fallback.name} instead")
-        return PlanResult(plan, self.fallback.name, self.backend, tuple(notes), time.perf_counter() - started,
-                          attempts)  # fmt: skip
+        return PlanResult(plan, self.fallback.name, self.backend, tuple(notes), time.perf_counter() - started, attempts)
 
     @staticmethod
     def _checked(planner: Planner, text: str, context: PlanningContext) -> Plan:
@@ -123,8 +123,13 @@ def build_llm_planner(config: PlannerConfig) -> Planner:
         from robot.planning.openai_chat import OpenAIChat
 
         try:
-            model = OpenAIChat(config.openai_base_url, config.openai_model, config.openai_api_key,
-                               config.openai_timeout_s, config.openai_response_format)  # fmt: skip
+            model = OpenAIChat(
+                config.openai_base_url,
+                config.openai_model,
+                config.openai_api_key,
+                config.openai_timeout_s,
+                config.openai_response_format,
+            )
         except ImportError as exc:
             raise PlanningError("the openai backend needs the openai package") from exc
         return LLMPlanner(model, config.max_repairs)

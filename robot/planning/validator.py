@@ -42,8 +42,10 @@ def validate_plan(plan: Plan, world: WorldContext) -> tuple[Plan | None, list[st
             if pose is not None:
                 args["target"] = pose.text()
             elif resolved is None:
-                errors.append(f"step {i}: unknown place {target!r} (known: {', '.join(world.places)}; or a pose "
-                              f"'x, y' or 'x, y, heading deg' in metres)")  # fmt: skip
+                errors.append(
+                    f"step {i}: unknown place {target!r} (known: {', '.join(world.places)}; or a pose "
+                    f"'x, y' or 'x, y, heading deg' in metres)"
+                )
             else:
                 args["target"] = resolved
         elif step.action in ("detect_object", "pick_object"):
@@ -68,8 +70,10 @@ def validate_plan(plan: Plan, world: WorldContext) -> tuple[Plan | None, list[st
         elif step.action == "wait":
             seconds = _seconds(args["seconds"])
             if seconds is None or not 0.0 < seconds <= MAX_WAIT_S:
-                errors.append(f"step {i}: wait needs a number of seconds above 0 and at most {MAX_WAIT_S:g}, "
-                              f"not {args['seconds']!r}")  # fmt: skip
+                errors.append(
+                    f"step {i}: wait needs a number of seconds above 0 and at most {MAX_WAIT_S:g}, "
+                    f"not {args['seconds']!r}"
+                )
             else:
                 args["seconds"] = f"{seconds:g}"
         canonical_steps.append(Step(step.action, args))

@@ -92,5 +92,6 @@ class Battery:
         # P = V I with V = OCV - I R: the smaller root. Past what the pack can deliver it gives out at OCV / 2.
         disc = ocv * ocv - 4.0 * r * load_w
         current = (ocv - np.sqrt(disc)) / (2.0 * r) if disc > 0 else ocv / (2.0 * r)
-        return BatteryReading(voltage_v=float(ocv - current * r), current_a=float(current), soc=self.soc,
-                              power_w=float(load_w))  # fmt: skip
+        return BatteryReading(
+            voltage_v=float(ocv - current * r), current_a=float(current), soc=self.soc, power_w=float(load_w)
+        )

@@ -53,8 +53,9 @@ class MujocoSimBackend:
         self._imu_quat = self._sensor_slice("imu_quat")
         self._accel = self._sensor_slice("imu_accel")
         self._fsr = [self._sensor_slice(f"{side}_foot_fsr{i}") for side in ("left", "right") for i in range(4)]
-        self._spares = [int(self.model.body_mocapid[self.model.body(spare_obstacle_name(i)).id])
-                        for i in range(SPARE_OBSTACLES)]  # fmt: skip
+        self._spares = [
+            int(self.model.body_mocapid[self.model.body(spare_obstacle_name(i)).id]) for i in range(SPARE_OBSTACLES)
+        ]
         self._spares_placed = 0
         self._imu_frozen: tuple[float, np.ndarray, np.ndarray, np.ndarray] | None = None
         self.reset()
@@ -114,8 +115,16 @@ class MujocoSimBackend:
     def lose_imu(self, lost: bool) -> None:
         """Simulate an IMU that stops answering: its last sample is read again and again, with its old stamp."""
         d = self.data
-        self._imu_frozen = (float(d.time), d.sensordata[self._imu_quat].copy(), d.sensordata[self._gyro].copy(),
-                            d.sensordata[self._accel].copy()) if lost else None  # fmt: skip
+        self._imu_frozen = (
+            (
+                float(d.time),
+                d.sensordata[self._imu_quat].copy(),
+                d.sensordata[self._gyro].copy(),
+                d.sensordata[self._accel].copy(),
+            )
+            if lost
+            else None
+        )
 
     def read(self) -> Measurements:
         d = self.data

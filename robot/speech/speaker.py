@@ -23,9 +23,14 @@ StreamFactory = Callable[..., Any]  # sounddevice.OutputStream's signature
 
 
 class Speaker:
-    def __init__(self, device: AudioDevice, on_playing: Callable[[float], None] | None = None,
-                 on_error: Callable[[str], None] | None = None, stream_factory: StreamFactory | None = None,
-                 synthesize: Callable[[str], Audio] = synthesize_audio) -> None:  # fmt: skip
+    def __init__(
+        self,
+        device: AudioDevice,
+        on_playing: Callable[[float], None] | None = None,
+        on_error: Callable[[str], None] | None = None,
+        stream_factory: StreamFactory | None = None,
+        synthesize: Callable[[str], Audio] = synthesize_audio,
+    ) -> None:
         if not device.available:
             raise ValueError(device.describe())
         self.device = device

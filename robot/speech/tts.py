@@ -22,8 +22,7 @@ def espeak_available() -> bool:
     return shutil.which("espeak-ng") is not None
 
 
-def synthesize(text: str, voice: str = DEFAULT_VOICE, words_per_minute: int = DEFAULT_WPM,
-               pitch: int = 50) -> bytes:  # fmt: skip
+def synthesize(text: str, voice: str = DEFAULT_VOICE, words_per_minute: int = DEFAULT_WPM, pitch: int = 50) -> bytes:
     """The sentence as WAV bytes (espeak-ng's 22.05 kHz mono)."""
     if not text.strip():
         raise TTSError("nothing to say")
@@ -33,14 +32,18 @@ def synthesize(text: str, voice: str = DEFAULT_VOICE, words_per_minute: int = DE
         raise TTSError("espeak-ng is not installed (apt-get install espeak-ng)")
     done = subprocess.run(
         ["espeak-ng", "-v", voice, "-s", str(int(words_per_minute)), "-p", str(int(pitch)), "--stdout", text],
-        capture_output=True, timeout=30, check=False, preexec_fn=ordinary_priority,
-    )  # fmt: skip
+        capture_output=True,
+        timeout=30,
+        check=False,
+        preexec_fn=ordinary_priority,
+    )
     if done.returncode != 0 or not done.stdout.startswith(b"RIFF"):
         raise TTSError(f"espeak-ng failed: {done.stderr.decode(errors='replace').strip() or done.returncode}")
     return done.stdout
 
 
-def synthesize_audio(text: str, voice: str = DEFAULT_VOICE, words_per_minute: int = DEFAULT_WPM,
-                     pitch: int = 50) -> Audio:  # fmt: skip
+def synthesize_audio(
+    text: str, voice: str = DEFAULT_VOICE, words_per_minute: int = DEFAULT_WPM, pitch: int = 50
+) -> Audio:
     """As 16 kHz mono, for the recogniser (and its tests)."""
     return read_wav_bytes(synthesize(text, voice, words_per_minute, pitch))

@@ -12,8 +12,14 @@ def record_session(factory, worker, audio_dir: str, estop: bool = True) -> int:
     recorder = SessionRecorder(factory, worker, kind="run", seed=0, audio_dir=audio_dir, camera_hz=0)
     assert worker.wait_for(lambda s: s.sim_time_s >= 0.5, 30.0)
     wav = b"RIFF" + b"\0" * 40
-    heard = {"text": "say hello", "confidence": 0.8, "engine": "pocketsphinx", "in_grammar": True, "audio_s": 1.2,
-             "decode_ms": 40.0}  # fmt: skip
+    heard = {
+        "text": "say hello",
+        "confidence": 0.8,
+        "engine": "pocketsphinx",
+        "in_grammar": True,
+        "audio_s": 1.2,
+        "decode_ms": 40.0,
+    }
     recorder.record_transcript(heard, "cli", save_recording(audio_dir, recorder.session_id, wav))
     reply = worker.submit(RunCommand("say hello"))
     recorder.record_command("say hello", "cli", reply)

@@ -70,8 +70,7 @@ def test_no_serving_beyond_loopback_without_access_control(settings) -> None:
     AccessControl("auto", store, "0.0.0.0").check_exposure()
 
 
-def test_serve_refuses_a_network_address_without_users_before_starting_anything(settings, monkeypatch,
-                                                                                 capsys) -> None:  # fmt: skip
+def test_serve_refuses_a_network_address_without_users_before_starting_anything(settings, monkeypatch, capsys) -> None:
     monkeypatch.setenv("DATABASE_URL", settings.database_url)
     from app.settings import get_settings
 
@@ -174,8 +173,10 @@ def test_the_websocket_lets_viewers_stop_and_refuses_other_sites(secured) -> Non
         ws.receive_json()
     # nor a request that changes something, even with a valid login
     assert client.post("/api/estop/reset", headers=evil).status_code == 403
-    assert client.post("/api/estop/reset", headers={**headers["ada"], "Origin": "http://testserver"}).status_code \
-        in (200, 409)  # fmt: skip
+    assert client.post("/api/estop/reset", headers={**headers["ada"], "Origin": "http://testserver"}).status_code in (
+        200,
+        409,
+    )
 
 
 def test_users_from_the_command_line(settings, monkeypatch, capsys) -> None:

@@ -38,9 +38,19 @@ def test_config_names_places_and_objects(client) -> None:
 
 def test_openapi_lists_the_endpoints(client) -> None:
     paths = client.get("/openapi.json").json()["paths"]
-    for path in ("/api/health", "/api/commands", "/api/estop", "/api/estop/reset", "/api/replan",
-                 "/api/sessions", "/api/sessions/{session_id}", "/api/teleop", "/api/teleop/stop", "/api/posture",
-                 "/api/reset"):  # fmt: skip
+    for path in (
+        "/api/health",
+        "/api/commands",
+        "/api/estop",
+        "/api/estop/reset",
+        "/api/replan",
+        "/api/sessions",
+        "/api/sessions/{session_id}",
+        "/api/teleop",
+        "/api/teleop/stop",
+        "/api/posture",
+        "/api/reset",
+    ):
         assert path in paths
 
 

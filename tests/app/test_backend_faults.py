@@ -105,8 +105,9 @@ class SilentServer:
 @pytest.fixture
 def llm_client(settings, make_worker) -> Iterator[tuple[TestClient, SilentServer]]:
     server = SilentServer()
-    settings = settings.model_copy(update={"planner_backend": "openai", "openai_base_url": server.url,
-                                           "openai_timeout_s": 1.0})  # fmt: skip
+    settings = settings.model_copy(
+        update={"planner_backend": "openai", "openai_base_url": server.url, "openai_timeout_s": 1.0}
+    )
     runtime = Runtime.start(settings, worker=make_worker(realtime=True, planning=settings.planner_config()))
     with TestClient(create_app(settings, runtime=runtime)) as client:
         client.runtime = runtime  # type: ignore[attr-defined]
@@ -124,7 +125,8 @@ def test_a_hung_then_dead_llm_server_falls_back_to_rules_and_says_why(llm_client
     server.close()  # now it is gone altogether
     gone = client.post("/api/commands", json={"text": "say the model is gone"})
     assert gone.status_code == 202
-    fallback = wait_until(lambda: len(e := [e for e in client.get("/api/events").json()
-                                            if e["kind"] == "plan/fallback"]) == 2 and e)  # fmt: skip
+    fallback = wait_until(
+        lambda: len(e := [e for e in client.get("/api/events").json() if e["kind"] == "plan/fallback"]) == 2 and e
+    )
     assert "cannot reach" in fallback[-1]["message"]
     assert client.get("/api/health").status_code == 200 and not client.runtime.worker.state().estop_latched

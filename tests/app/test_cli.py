@@ -10,8 +10,17 @@ import sys
 
 import pytest
 
-RESULT_KEYS = {"success", "transcript", "plan", "steps", "sim_time_s", "wall_time_s", "fell", "held_object",
-               "session_id"}  # fmt: skip
+RESULT_KEYS = {
+    "success",
+    "transcript",
+    "plan",
+    "steps",
+    "sim_time_s",
+    "wall_time_s",
+    "fell",
+    "held_object",
+    "session_id",
+}
 
 
 def humanoid(tmp_path, *args: str, timeout_s: float = 120.0, env: dict[str, str] | None = None):
@@ -32,8 +41,14 @@ def test_run_prints_the_result_and_records_a_session(tmp_path) -> None:
     result = json.loads(done.stdout)
     assert result.keys() >= RESULT_KEYS
     assert result["success"] is True and result["fell"] is False
-    assert result["steps"] == [{"action": "say", "args": {"text": "hello from the cli"}, "status": "succeeded",
-                                "detail": 'said "hello from the cli"'}]  # fmt: skip
+    assert result["steps"] == [
+        {
+            "action": "say",
+            "args": {"text": "hello from the cli"},
+            "status": "succeeded",
+            "detail": 'said "hello from the cli"',
+        }
+    ]
     assert result["session_id"] == 1
     assert result["sim_time_s"] > 0
 
@@ -53,12 +68,19 @@ def test_run_prints_the_result_and_records_a_session(tmp_path) -> None:
 def test_bring_carries_the_mug_to_the_table_and_puts_it_down(tmp_path) -> None:
     """The whole fetch: walk, find, grasp, back away from the counter carrying it, walk, put it down at a free spot
     in reach of where the robot stopped, check it stands there, say so."""
-    done = humanoid(tmp_path, "run", "bring the red mug to the living-room table", "--seed", "2", "--json",
-                    timeout_s=400)  # fmt: skip
+    done = humanoid(
+        tmp_path, "run", "bring the red mug to the living-room table", "--seed", "2", "--json", timeout_s=400
+    )
     result = json.loads(done.stdout)
     steps = result["steps"]
-    assert [s["action"] for s in steps] == ["navigate_to", "detect_object", "pick_object", "navigate_to",
-                                            "place_object", "say"]  # fmt: skip
+    assert [s["action"] for s in steps] == [
+        "navigate_to",
+        "detect_object",
+        "pick_object",
+        "navigate_to",
+        "place_object",
+        "say",
+    ]
     assert [s["status"] for s in steps] == ["succeeded"] * 6, steps
     assert result["success"] is True and result["held_object"] is None and not result["fell"]
     assert "put the red mug on the living-room table" in steps[4]["detail"]
@@ -79,8 +101,19 @@ def test_bad_arguments_are_refused(tmp_path) -> None:
 def test_bench_walk_writes_its_figures_as_json(tmp_path) -> None:
     out = tmp_path / "walk.json"
     # 6 s of real time: a third of it walking forward (3 s left ~2 cm after the start-up, and under load less)
-    done = humanoid(tmp_path, "bench", "walk", "--scripts", "2", "--script-duration", "8",
-                    "--realtime-duration", "6", "--output", str(out))  # fmt: skip
+    done = humanoid(
+        tmp_path,
+        "bench",
+        "walk",
+        "--scripts",
+        "2",
+        "--script-duration",
+        "8",
+        "--realtime-duration",
+        "6",
+        "--output",
+        str(out),
+    )
     assert done.returncode == 0, done.stderr
     result = json.loads(out.read_text())
     assert result["scripts"] == 2 and len(result["trials"]) == 2
@@ -135,8 +168,13 @@ def test_bench_language_reports_both_sets_against_the_bars(tmp_path) -> None:
 
 def test_plan_with_an_unreachable_llm_falls_back_to_rules_and_says_why(tmp_path) -> None:
     env_url = {"HUMANOID_OPENAI_BASE_URL": "http://127.0.0.1:9/v1"}
-    done = subprocess.run([sys.executable, "-m", "app.cli", "plan", "go to the dock", "--backend", "openai", "--json"],
-                          capture_output=True, text=True, env={**os.environ, **env_url}, timeout=60)  # fmt: skip
+    done = subprocess.run(
+        [sys.executable, "-m", "app.cli", "plan", "go to the dock", "--backend", "openai", "--json"],
+        capture_output=True,
+        text=True,
+        env={**os.environ, **env_url},
+        timeout=60,
+    )
     assert done.returncode == 0, done.stderr
     assert json.loads(done.stdout)[0] == {"action": "navigate_to", "target": "charging dock"}
     assert "openai: cannot reach http://127.0.0.1:9/v1" in done.stderr and "planned by rules instead" in done.stderr

@@ -32,8 +32,10 @@ def _server_errors(operation, mode) -> list[str]:  # type: ignore[no-untyped-def
     def run(case) -> None:  # type: ignore[no-untyped-def]
         response = case.call()
         if response.status_code >= 500 and response.status_code not in (501, 503):
-            found.append(f"{operation.method.upper()} {operation.path} -> {response.status_code}: "
-                         f"{response.text[:200]!r} for {case.as_curl_command()[:300]}")  # fmt: skip
+            found.append(
+                f"{operation.method.upper()} {operation.path} -> {response.status_code}: "
+                f"{response.text[:200]!r} for {case.as_curl_command()[:300]}"
+            )
 
     try:
         run()
@@ -52,8 +54,12 @@ def test_no_operation_answers_a_server_error_and_the_robot_stays_safe(settings, 
         schema = schemathesis.openapi.from_asgi("/openapi.json", app)
         operations = [result.ok() for result in schema.get_all_operations()]
         assert len(operations) >= 40
-        errors = [e for op in operations for mode in (GenerationMode.POSITIVE, GenerationMode.NEGATIVE)
-                  for e in _server_errors(op, mode)]  # fmt: skip
+        errors = [
+            e
+            for op in operations
+            for mode in (GenerationMode.POSITIVE, GenerationMode.NEGATIVE)
+            for e in _server_errors(op, mode)
+        ]
         assert not errors, "\n".join(errors[:20])
         assert runtime.worker.is_alive()
         state = runtime.worker.state()

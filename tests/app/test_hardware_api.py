@@ -27,8 +27,9 @@ def hardware_client(request, settings, layout) -> Iterator[tuple[TestClient, Bus
     indirect=True)`): the other tests do not heartbeat."""
     deadman_s = getattr(request, "param", 0.0)
     with BusEmulator([j.servo_id for j in CONFIG.joints]) as emulator:
-        worker = HardwareWorker(dataclasses.replace(CONFIG, port=emulator.port_name), layout, deadman_s=deadman_s,
-                                estop_torque_off_s=1.0)  # fmt: skip
+        worker = HardwareWorker(
+            dataclasses.replace(CONFIG, port=emulator.port_name), layout, deadman_s=deadman_s, estop_torque_off_s=1.0
+        )
         runtime = Runtime.start(settings.model_copy(update={"backend": "dynamixel"}), worker=worker)
         with TestClient(create_app(settings, runtime=runtime)) as client:
             yield client, emulator

@@ -49,14 +49,20 @@ def test_state_samples_of_old_sessions_become_telemetry_and_come_back_on_downgra
     engine = create_engine(url)
     qpos = [[0.1 * i, 0.2, 0.3, 1.0, 0.0, 0.0, 0.0, 0.5] for i in range(25)]
     with engine.begin() as connection:
-        connection.execute(text("INSERT INTO sessions (id, kind, started_at, seed, backend) "
-                                "VALUES (1, 'serve', '2026-11-20 10:00:00', 0, 'sim')"))  # fmt: skip
+        connection.execute(
+            text(
+                "INSERT INTO sessions (id, kind, started_at, seed, backend) "
+                "VALUES (1, 'serve', '2026-11-20 10:00:00', 0, 'sim')"
+            )
+        )
         for i, q in enumerate(qpos):
             connection.execute(
-                text("INSERT INTO state_samples (session_id, wall_time, sim_time_s, mode, x, y, z, yaw_rad, tilt_deg,"
-                     " qpos) VALUES (1, :wall, :sim, 'idle', :x, 0.2, 0.3, 0, 0, :qpos)"),
+                text(
+                    "INSERT INTO state_samples (session_id, wall_time, sim_time_s, mode, x, y, z, yaw_rad, tilt_deg,"
+                    " qpos) VALUES (1, :wall, :sim, 'idle', :x, 0.2, 0.3, 0, 0, :qpos)"
+                ),
                 {"wall": f"2026-11-20 10:00:{i:02d}", "sim": i * 0.1, "x": q[0], "qpos": json.dumps(q)},
-            )  # fmt: skip
+            )
     upgrade_to_head(url)
     factory = make_session_factory(engine)
     with factory() as db:

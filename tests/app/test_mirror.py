@@ -73,11 +73,16 @@ def test_mirror_draws_the_planned_footsteps_com_and_zmp_and_clears_them(make_wor
 
     port = MovablePort(make_worker(realtime=False))
     walking = LocomotionState(
-        phase="walking", posture="stand", command=(0.1, 0.0, 0.0), velocity=(0.1, 0.0, 0.0),
+        phase="walking",
+        posture="stand",
+        command=(0.1, 0.0, 0.0),
+        velocity=(0.1, 0.0, 0.0),
         estimated_pose=(0.0, 0.0, 0.0),
         footsteps=(Footprint("left", 0.05, 0.05, 0.0), Footprint("right", 0.1, -0.05, 0.1)),
-        com=(0.02, 0.0, 0.23), zmp=(0.03, 0.01), support="left",
-    )  # fmt: skip
+        com=(0.02, 0.0, 0.23),
+        zmp=(0.03, 0.01),
+        support="left",
+    )
     port.snapshot = dataclasses.replace(port.snapshot, locomotion=walking)
     mirror = SceneMirror(port)
     try:

@@ -38,8 +38,9 @@ def test_migrations_build_the_schema_on_postgres_and_take_it_down_again(postgres
     engine.dispose()
 
 
-def test_sessions_are_recorded_reviewed_exported_and_deleted_on_postgres(postgres_url: str, make_worker,
-                                                                          tmp_path: Path) -> None:  # fmt: skip
+def test_sessions_are_recorded_reviewed_exported_and_deleted_on_postgres(
+    postgres_url: str, make_worker, tmp_path: Path
+) -> None:
     upgrade_to_head(postgres_url)
     engine = make_engine(postgres_url)
     factory = make_session_factory(engine)

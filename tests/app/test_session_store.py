@@ -70,8 +70,17 @@ def test_the_list_filters_by_date_outcome_text_estop_and_fall(recorded, make_wor
     factory, audio_dir, sid = recorded
     quiet = record_session(factory, make_worker(realtime=False), audio_dir, estop=False)
     with factory() as db:
-        db.add(EventRow(session_id=quiet, seq=10_000, kind="robot/fell", level=2, message="the robot fell",
-                        wall_time=datetime.now(UTC), sim_time_s=1.0))  # fmt: skip
+        db.add(
+            EventRow(
+                session_id=quiet,
+                seq=10_000,
+                kind="robot/fell",
+                level=2,
+                message="the robot fell",
+                wall_time=datetime.now(UTC),
+                sim_time_s=1.0,
+            )
+        )
         db.execute(SessionRow.__table__.update().where(SessionRow.id == quiet).values(outcome="failed"))
         db.commit()
 
@@ -108,8 +117,16 @@ def test_retention_deletes_old_and_surplus_sessions_but_never_the_live_one(store
     factory, audio_dir = store
     now = datetime.now(UTC)
     with factory() as db:
-        rows = [SessionRow(kind="run", seed=0, backend="sim", started_at=now - timedelta(days=age),
-                           ended_at=now - timedelta(days=age)) for age in (40, 20, 5, 1)]  # fmt: skip
+        rows = [
+            SessionRow(
+                kind="run",
+                seed=0,
+                backend="sim",
+                started_at=now - timedelta(days=age),
+                ended_at=now - timedelta(days=age),
+            )
+            for age in (40, 20, 5, 1)
+        ]
         live = SessionRow(kind="serve", seed=0, backend="sim", started_at=now - timedelta(days=60))
         db.add_all([*rows, live])
         db.commit()
@@ -124,17 +141,36 @@ def test_a_session_left_open_by_a_crash_is_closed_as_interrupted_at_its_last_rec
     factory, _ = store
     now = datetime.now(UTC)
     with factory() as db:
-        crashed = SessionRow(kind="serve", seed=0, backend="sim", started_at=now - timedelta(hours=1),
-                             heartbeat_at=now - timedelta(minutes=30))  # fmt: skip
-        alive = SessionRow(kind="serve", seed=0, backend="sim", started_at=now - timedelta(hours=1),
-                           heartbeat_at=now - timedelta(seconds=2))  # fmt: skip
+        crashed = SessionRow(
+            kind="serve",
+            seed=0,
+            backend="sim",
+            started_at=now - timedelta(hours=1),
+            heartbeat_at=now - timedelta(minutes=30),
+        )
+        alive = SessionRow(
+            kind="serve",
+            seed=0,
+            backend="sim",
+            started_at=now - timedelta(hours=1),
+            heartbeat_at=now - timedelta(seconds=2),
+        )
         here = {"recorder_host": socket.gethostname(), "heartbeat_at": now, "started_at": now}
         killed = SessionRow(kind="serve", seed=0, backend="sim", recorder_pid=_dead_pid(), **here)
         ours = SessionRow(kind="serve", seed=0, backend="sim", recorder_pid=os.getpid(), **here)
         db.add_all([crashed, alive, killed, ours])
         db.flush()
-        db.add(EventRow(session_id=crashed.id, seq=1, kind="x", level=0, message="last words",
-                        wall_time=now - timedelta(minutes=29), sim_time_s=5.0))  # fmt: skip
+        db.add(
+            EventRow(
+                session_id=crashed.id,
+                seq=1,
+                kind="x",
+                level=0,
+                message="last words",
+                wall_time=now - timedelta(minutes=29),
+                sim_time_s=5.0,
+            )
+        )
         db.commit()
     assert sorted(close_interrupted_sessions(factory)) == [crashed.id, killed.id]  # the killed one at once
     with factory() as db:

@@ -22,8 +22,9 @@ def recorded(client, text: str) -> tuple[list[str], list[str]]:
     rt = client.runtime
     with rt.db() as db:
         commands = db.scalars(select(CommandRow.text).where(CommandRow.session_id == rt.recorder.session_id)).all()
-        said = db.scalars(select(EventRow.message).where(EventRow.session_id == rt.recorder.session_id,
-                                                         EventRow.kind == "speech/say")).all()  # fmt: skip
+        said = db.scalars(
+            select(EventRow.message).where(EventRow.session_id == rt.recorder.session_id, EventRow.kind == "speech/say")
+        ).all()
     return list(commands), [m for m in said if text in m]
 
 

@@ -66,8 +66,14 @@ def test_exits_are_described_for_a_person() -> None:
 def test_a_dead_worker_is_restarted_with_the_estop_latched_and_one_that_keeps_dying_is_left_down() -> None:
     worker = DyingWorker()
     deaths, restarts = [], []
-    supervisor = WorkerSupervisor(worker, on_death=deaths.append, on_restart=lambda: restarts.append(1),
-                                  max_restarts=2, window_s=60, first_backoff_s=0.05)  # fmt: skip
+    supervisor = WorkerSupervisor(
+        worker,
+        on_death=deaths.append,
+        on_restart=lambda: restarts.append(1),
+        max_restarts=2,
+        window_s=60,
+        first_backoff_s=0.05,
+    )
     supervisor.start()
     try:
         for n in (1, 2):
@@ -141,14 +147,20 @@ def test_a_killed_robot_process_is_restarted_stopped_and_the_server_never_stops_
         assert old.outcome == "crashed" and "SIGKILL" in old.summary["cause"]
         said = db.scalars(select(CommandRow.text).where(CommandRow.session_id == first_session)).all()
         assert "say before the crash" in said  # nothing recorded before the crash is lost
-        died = db.scalars(select(EventRow).where(EventRow.session_id == first_session,
-                                                 EventRow.kind == "worker/died")).one()  # fmt: skip
+        died = db.scalars(
+            select(EventRow).where(EventRow.session_id == first_session, EventRow.kind == "worker/died")
+        ).one()
         assert "SIGKILL" in died.message
-    restarted = wait_until(lambda: next((e for e in served.get("/api/events").json()
-                                         if e["kind"] == "worker/restarted"), None), timeout=10)  # fmt: skip
+    restarted = wait_until(
+        lambda: next((e for e in served.get("/api/events").json() if e["kind"] == "worker/restarted"), None), timeout=10
+    )
     assert "e-stop latched" in restarted["message"]
-    worker_status = next(s for g in served.get("/api/diagnostics").json()["groups"].values()
-                         for s in g["statuses"] if s["name"] == "links/robot_worker")  # fmt: skip
+    worker_status = next(
+        s
+        for g in served.get("/api/diagnostics").json()["groups"].values()
+        for s in g["statuses"]
+        if s["name"] == "links/robot_worker"
+    )
     assert worker_status["level_name"] == "OK" and "restarted 1 times" in worker_status["message"]
     assert served.post("/api/estop/reset").status_code == 200
     assert served.post("/api/commands", json={"text": "say after the crash"}).status_code == 202

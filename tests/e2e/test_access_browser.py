@@ -29,8 +29,10 @@ def test_login_roles_and_control_from_the_page(tmp_path) -> None:
     store = UserStore(make_session_factory(make_engine(url)))
     store.add("ada", Role.OPERATOR, PASSWORD)
     store.add("vic", Role.VIEWER, PASSWORD)
-    with ServerProcess(workdir, extra_env={"HUMANOID_PERCEPTION": "false"}) as server, \
-            playwright_api.sync_playwright() as playwright:  # fmt: skip
+    with (
+        ServerProcess(workdir, extra_env={"HUMANOID_PERCEPTION": "false"}) as server,
+        playwright_api.sync_playwright() as playwright,
+    ):
         browser = launch_chromium(playwright)
         ada = browser.new_context().new_page()
         ada.goto(server.url)

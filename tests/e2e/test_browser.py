@@ -161,8 +161,10 @@ def test_camera_stream_with_detections_map_and_a_search_from_the_page(page, serv
     expect(page.locator("#perc-status")).to_contain_text("camera", timeout=30_000)
     expect(page.locator("#camera-fps")).to_contain_text("fps shown", timeout=15_000)
     page.wait_for_timeout(2_000)
-    view = page.evaluate("({fps: window.humanoid.camera.fps, seq: window.humanoid.camera.seq,"
-                         " labels: window.humanoid.camera.detections.map(d => d.label)})")  # fmt: skip
+    view = page.evaluate(
+        "({fps: window.humanoid.camera.fps, seq: window.humanoid.camera.seq,"
+        " labels: window.humanoid.camera.detections.map(d => d.label)})"
+    )
     # the stream flows (its rate is the perception bench's business: a software-rendered page shows ~5 fps here)
     assert view["fps"] >= 2 and view["seq"] > 10
     assert "red mug" in view["labels"]  # in view from where the robot starts (seed 0), boxed on the image

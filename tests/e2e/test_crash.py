@@ -31,8 +31,11 @@ def test_a_killed_server_leaves_its_session_intact_up_to_the_last_second(tmp_pat
         session_id = first.get("/api/health")["session_id"]
         reply = first.post("/api/commands", json={"text": "go to the charging dock"})
         assert reply.status_code == 202
-        _wait(lambda: (p := first.get("/api/state")["plan"]) and p["steps"][0]["state"] == "running", 30.0,
-              "the walk starts")  # fmt: skip
+        _wait(
+            lambda: (p := first.get("/api/state")["plan"]) and p["steps"][0]["state"] == "running",
+            30.0,
+            "the walk starts",
+        )
         time.sleep(4.0)  # walking
         last_event_seq = max(e["seq"] for e in first.get("/api/events"))
         killed_at = time.time()
@@ -49,8 +52,11 @@ def test_a_killed_server_leaves_its_session_intact_up_to_the_last_second(tmp_pat
         recorded_seqs = {e["seq"] for e in crashed["events"]}
         # every event the server had published a moment before the kill is on disk
         assert set(range(1, last_event_seq + 1)) - recorded_seqs == set()
-        walls = httpx.get(f"{second.url}/api/sessions/{session_id}/telemetry",
-                          params={"fields": "wall_time_s", "max_points": 20000}, timeout=30).json()  # fmt: skip
+        walls = httpx.get(
+            f"{second.url}/api/sessions/{session_id}/telemetry",
+            params={"fields": "wall_time_s", "max_points": 20000},
+            timeout=30,
+        ).json()
         last_sample = walls["wall_time_s"][0][-1]
         assert killed_at - last_sample <= 1.0, f"lost {killed_at - last_sample:.2f} s of samples"
         sims = walls["sim_time_s"]

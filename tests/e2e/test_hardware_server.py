@@ -45,8 +45,9 @@ def wait_until(predicate, timeout: float = 10.0):
 
 def test_the_real_robot_from_the_page_torque_the_measured_pose_and_the_deadman(tmp_path) -> None:
     config = default_config()
-    with BusEmulator([j.servo_id for j in config.joints], baudrate=2_000_000,
-                     positions={KNEE_ID: KNEE_AT_START}) as emulator:  # fmt: skip
+    with BusEmulator(
+        [j.servo_id for j in config.joints], baudrate=2_000_000, positions={KNEE_ID: KNEE_AT_START}
+    ) as emulator:
         robot_toml = tmp_path / "robot.toml"
         # a slow test machine answers late: more margin than the 2 ms a real servo gets
         save_config(dataclasses.replace(config, port=emulator.port_name, reply_margin_ms=100.0), robot_toml)
@@ -113,8 +114,11 @@ def script_heartbeat(server: ServerProcess) -> Iterator[None]:
 def robot_process(server: ServerProcess) -> psutil.Process:
     """The robot worker's process: the server's child started by multiprocessing (not its resource tracker, nor
     the 3D mirrors' process, which runs at a lower priority)."""
-    (worker,) = [p for p in psutil.Process(server.pid).children()
-                 if "spawn_main" in " ".join(p.cmdline()) and p.nice() != MIRROR_NICE]  # fmt: skip
+    (worker,) = [
+        p
+        for p in psutil.Process(server.pid).children()
+        if "spawn_main" in " ".join(p.cmdline()) and p.nice() != MIRROR_NICE
+    ]
     return worker
 
 

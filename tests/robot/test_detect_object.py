@@ -83,8 +83,10 @@ def test_navigate_to_walks_to_the_counter_on_its_own_map_and_finds_the_mug() -> 
     layout = generate_world(0)
     worker = _headless(layout)
     try:
-        steps = [{"action": "navigate_to", "args": {"target": "counter"}},
-                 {"action": "detect_object", "args": {"object": "red mug"}}]  # fmt: skip
+        steps = [
+            {"action": "navigate_to", "args": {"target": "counter"}},
+            {"action": "detect_object", "args": {"object": "red mug"}},
+        ]
         assert worker.submit(ExecutePlan({"steps": steps})).accepted
         assert worker.wait_for(lambda s: s.plan is not None and s.plan.state != PlanState.RUNNING, 400)
         state = worker.state()

@@ -73,8 +73,14 @@ def test_a_jam_holds_the_load_whatever_is_asked_and_heat_is_injected_where_named
 
 
 def _readings(**overrides) -> ServoReadings:
-    base = dict(temperature_c=[40.0], current_a=[0.3], voltage_v=[12.0], load_pct=[10.0], position_error_rad=[0.01],
-                error_bits=[0])  # fmt: skip
+    base = dict(
+        temperature_c=[40.0],
+        current_a=[0.3],
+        voltage_v=[12.0],
+        load_pct=[10.0],
+        position_error_rad=[0.01],
+        error_bits=[0],
+    )
     base.update(overrides)
     return ServoReadings(**{k: np.array(v) for k, v in base.items()})
 
@@ -147,8 +153,12 @@ def test_the_monitor_reports_changes_once_and_stops_the_robot_once_per_fault() -
     source = _Source()
     events: list[tuple[str, Level]] = []
     stops: list[str] = []
-    monitor = DiagnosticsMonitor([source, lambda: 1 / 0], lambda kind, message, level=Level.OK, **data:
-                                 events.append((kind, level)), stops.append, lambda: 12.0)  # fmt: skip
+    monitor = DiagnosticsMonitor(
+        [source, lambda: 1 / 0],
+        lambda kind, message, level=Level.OK, **data: events.append((kind, level)),
+        stops.append,
+        lambda: 12.0,
+    )
     first = monitor.sample()
     assert first.find("diagnostics/monitor").level == Level.WARN  # the broken source is reported, the rest goes on
     events.clear()

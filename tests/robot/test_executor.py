@@ -79,8 +79,13 @@ def test_each_step_sees_the_steps_after_it_so_it_can_prepare_for_them() -> None:
         return "ok"
 
     capabilities = {**default_capabilities(), "navigate_to": record, "pick_object": record, "say": record}
-    plan = Plan((Step("navigate_to", {"target": "kitchen counter"}), Step("pick_object", {"object": "red mug"}),
-                 Step("say", {"text": "done"})))  # fmt: skip
+    plan = Plan(
+        (
+            Step("navigate_to", {"target": "kitchen counter"}),
+            Step("pick_object", {"object": "red mug"}),
+            Step("say", {"text": "done"}),
+        )
+    )
     result, _, _ = run(plan, capabilities)
     assert result == PlanState.SUCCEEDED
     assert seen == [("pick_object", "say"), ("say",), ()]

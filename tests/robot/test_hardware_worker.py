@@ -40,8 +40,9 @@ def emulator() -> Iterator[BusEmulator]:
 @pytest.fixture
 def robot(emulator, layout) -> Iterator[HardwareWorker]:
     # no deadman here (these tests do not heartbeat); tests/app/test_hardware_api.py tests it through the page
-    worker = HardwareWorker(dataclasses.replace(CONFIG, port=emulator.port_name), layout, estop_torque_off_s=1.0,
-                            deadman_s=0.0)  # fmt: skip
+    worker = HardwareWorker(
+        dataclasses.replace(CONFIG, port=emulator.port_name), layout, estop_torque_off_s=1.0, deadman_s=0.0
+    )
     worker.start()
     yield worker
     worker.stop()

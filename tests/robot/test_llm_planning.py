@@ -126,8 +126,9 @@ def test_the_prompt_carries_the_world_the_conversation_and_the_failure(layout) -
     known = (KnownObject("red mug", (1.64, 0.05, 0.25), "kitchen counter", 3.0, 0.9),)
     world = WorldContext.from_layout(layout, held_object=None, known_objects=known)
     history = (Turn("find the apple", Plan((Step("detect_object", {"object": "green apple"}),)), "succeeded"),)
-    context = PlanningContext(world, history, failure="step 3 pick_object failed: grasp slipped",
-                              done=("navigate_to(kitchen counter)",))  # fmt: skip
+    context = PlanningContext(
+        world, history, failure="step 3 pick_object failed: grasp slipped", done=("navigate_to(kitchen counter)",)
+    )
     messages = prompt.messages("pick up the red mug", context)
     assert messages[0]["role"] == "system" and "look_around" in messages[0]["content"]
     assert messages[-1]["role"] == "user"

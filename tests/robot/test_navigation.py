@@ -135,8 +135,7 @@ def _length(path: list[tuple[float, float]]) -> float:
 
 
 def _grown(costmap: Costmap, margin_m: float) -> Costmap:
-    return Costmap(inflate(costmap.blocked, margin_m / costmap.resolution), costmap.x0, costmap.y0,
-                   costmap.resolution)  # fmt: skip
+    return Costmap(inflate(costmap.blocked, margin_m / costmap.resolution), costmap.x0, costmap.y0, costmap.resolution)
 
 
 def _closest_approach(path: list[tuple[float, float]], box: tuple[float, float, float, float]) -> float:

@@ -135,8 +135,9 @@ class MappedBody(DriftingBody):
         self.commands: list[tuple[float, float, float]] = []  # as driven, one per wait
 
     def costmap(self, inflate_m: float) -> Costmap:  # type: ignore[override]
-        return Costmap(inflate(self.map.blocked, inflate_m / self.map.resolution), self.map.x0, self.map.y0,
-                       self.map.resolution)  # fmt: skip
+        return Costmap(
+            inflate(self.map.blocked, inflate_m / self.map.resolution), self.map.x0, self.map.y0, self.map.resolution
+        )
 
     def wait(self, seconds: float) -> None:
         vx, vy, w = self.velocity

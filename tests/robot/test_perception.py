@@ -28,8 +28,7 @@ def _qpos(suite: SensorSuite, x: float, y: float, yaw: float, tilt: float = -0.3
     return qpos
 
 
-def _sense(suite: SensorSuite, qpos: np.ndarray, believed_offset: tuple[float, float] = (0.0, 0.0),
-           lidar: bool = True):  # fmt: skip
+def _sense(suite: SensorSuite, qpos: np.ndarray, believed_offset: tuple[float, float] = (0.0, 0.0), lidar: bool = True):
     trunk = qpos[0:3].copy()
     trunk[:2] += believed_offset
     return suite.process(SensorSnapshot(0.0, qpos, trunk, qpos[3:7].copy(), lidar=lidar))
@@ -61,8 +60,9 @@ def test_camera_is_a_d435_class_rgbd_sensor(suite: SensorSuite) -> None:
 
 
 @pytest.mark.parametrize(("distance", "y"), [(0.5, 0.35), (0.9, 0.35), (1.4, 0.05)])
-def test_every_object_on_the_counter_is_found_and_localised_to_a_centimetre(suite: SensorSuite, distance: float,
-                                                                             y: float) -> None:  # fmt: skip
+def test_every_object_on_the_counter_is_found_and_localised_to_a_centimetre(
+    suite: SensorSuite, distance: float, y: float
+) -> None:
     """From near and far (the far view looks through the doorway in the partition)."""
     counter_front = 1.55
     tilt = -math.atan2(0.43 - 0.25, distance + 0.08)
@@ -192,8 +192,15 @@ def test_scan_matching_takes_out_odometry_drift() -> None:
         suite.close()
 
 
-def _room_scan(x: float, y: float, yaw: float, rng: np.random.Generator, half: tuple[float, float] = (2.0, 1.5),
-               beams: int = 512, noise_m: float = 0.01) -> LaserScan:  # fmt: skip
+def _room_scan(
+    x: float,
+    y: float,
+    yaw: float,
+    rng: np.random.Generator,
+    half: tuple[float, float] = (2.0, 1.5),
+    beams: int = 512,
+    noise_m: float = 0.01,
+) -> LaserScan:
     """A scan from (x, y, yaw) inside a plain walled room centred on the origin, with the lidar's range noise."""
     angles = -math.pi + 2 * math.pi / beams * np.arange(beams)
     c, s = np.cos(angles + yaw), np.sin(angles + yaw)

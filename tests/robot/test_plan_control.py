@@ -77,13 +77,14 @@ def test_approval_can_be_switched_off_and_on(make_worker) -> None:
     assert worker.submit(SetApproval(False)).accepted
     reply = worker.submit(RunCommand("say hi"))
     assert "queued" in reply.message
-    assert worker.wait_for(succeeded(reply.command_id), 10.0)  # fmt: skip
+    assert worker.wait_for(succeeded(reply.command_id), 10.0)
 
 
 def test_pause_interrupts_the_running_step_and_resume_runs_it_again_then_the_rest(make_worker) -> None:
     worker = make_worker(realtime=True)
-    plan = {"steps": [{"action": "say", "text": "one"}, {"action": "wait", "seconds": 2},
-                      {"action": "say", "text": "done"}]}  # fmt: skip
+    plan = {
+        "steps": [{"action": "say", "text": "one"}, {"action": "wait", "seconds": 2}, {"action": "say", "text": "done"}]
+    }
     assert worker.submit(ExecutePlan(plan)).accepted
     assert worker.wait_for(lambda s: s.plan is not None and s.plan.steps[1].state == StepState.RUNNING, 10.0)
     assert worker.submit(PausePlan()).accepted
@@ -97,8 +98,11 @@ def test_pause_interrupts_the_running_step_and_resume_runs_it_again_then_the_res
     assert resumed.accepted and "resumed at step 2" in resumed.message
     assert worker.wait_for(lambda s: s.plan is not None and s.plan.state == PlanState.SUCCEEDED, 15.0)
     final = worker.state().plan
-    assert final.plan_id == paused.plan_id and [s.detail for s in final.steps] == ['said "one"', "waited 2 s",
-                                                                                   'said "done"']  # fmt: skip
+    assert final.plan_id == paused.plan_id and [s.detail for s in final.steps] == [
+        'said "one"',
+        "waited 2 s",
+        'said "done"',
+    ]
     assert final.steps[1].sim_end_s - final.steps[1].sim_start_s >= 2.0  # the interrupted wait ran again in full
     assert worker.submit(ResumePlan()).refusal == Refusal.NOTHING_TO_DO
 
@@ -110,7 +114,7 @@ def test_a_new_command_discards_a_paused_plan(make_worker) -> None:
     worker.submit(PausePlan())
     assert worker.wait_for(lambda s: s.plan is not None and s.plan.state == PlanState.PAUSED, 5.0)
     second = worker.submit(RunCommand("say hi"))
-    assert worker.wait_for(succeeded(second.command_id), 10.0)  # fmt: skip
+    assert worker.wait_for(succeeded(second.command_id), 10.0)
     assert first.command_id != second.command_id
     assert worker.submit(ResumePlan()).refusal == Refusal.NOTHING_TO_DO
 

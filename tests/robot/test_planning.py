@@ -90,8 +90,10 @@ def test_holding_the_object_skips_the_fetch(layout) -> None:
 def test_validator_rejects_unknown_action_with_a_clear_reason(world) -> None:
     plan, errors = validate_plan_json({"steps": [{"action": "fly_to", "args": {"target": "moon"}}]}, world)
     assert plan is None
-    assert errors == ["step 1: unknown action 'fly_to' (known: navigate_to, detect_object, pick_object, "
-                      "place_object, say, look_around, describe_scene, go_home, wait, stop)"]  # fmt: skip
+    assert errors == [
+        "step 1: unknown action 'fly_to' (known: navigate_to, detect_object, pick_object, "
+        "place_object, say, look_around, describe_scene, go_home, wait, stop)"
+    ]
 
 
 @pytest.mark.parametrize(
@@ -113,12 +115,14 @@ def test_validator_rejects_malformed_plans(world, plan_json, fragment: str) -> N
 
 
 def test_validator_checks_the_world_and_the_order(world) -> None:
-    bad = Plan((
-        Step("navigate_to", {"target": "moon"}),
-        Step("place_object", {"location": "kitchen counter"}),
-        Step("pick_object", {"object": "red mug"}),
-        Step("pick_object", {"object": "green apple"}),
-    ))  # fmt: skip
+    bad = Plan(
+        (
+            Step("navigate_to", {"target": "moon"}),
+            Step("place_object", {"location": "kitchen counter"}),
+            Step("pick_object", {"object": "red mug"}),
+            Step("pick_object", {"object": "green apple"}),
+        )
+    )
     plan, errors = validate_plan(bad, world)
     assert plan is None
     assert errors == [

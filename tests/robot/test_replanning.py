@@ -23,9 +23,11 @@ class RecordingPlanner:
 
 def finished_for_good(command_id: int):
     return lambda s: (
-        s.plan is not None and s.plan.command_id == command_id and s.plan.state != PlanState.RUNNING
+        s.plan is not None
+        and s.plan.command_id == command_id
+        and s.plan.state != PlanState.RUNNING
         and not s.plan.replanning
-    )  # fmt: skip
+    )
 
 
 def test_a_failed_step_is_replanned_twice_with_the_failure_then_the_command_fails(make_worker) -> None:

@@ -205,8 +205,10 @@ def test_a_command_heard_by_the_robot_runs_and_its_recording_is_kept(voice_rig) 
 
 def test_speech_that_is_no_sure_command_waits_for_the_operator(voice_rig) -> None:
     bus, commands, make = voice_rig
-    make(_stream(0.8, _speech("the weather is lovely this afternoon"), 1.0, _speech("go to the charging dock"), 1.0),
-         auto_run=False)  # fmt: skip
+    make(
+        _stream(0.8, _speech("the weather is lovely this afternoon"), 1.0, _speech("go to the charging dock"), 1.0),
+        auto_run=False,
+    )
     heard = [e.data for e in _events(bus, "speech/heard", 2)]
     assert [h["will_run"] for h in heard] == [False, False]  # not sure, and (second) not allowed to run unasked
     assert not heard[0]["auto_run"] and heard[1]["auto_run"] and heard[1]["text"] == "go to the charging dock"

@@ -59,8 +59,12 @@ def test_wait_takes_its_seconds_of_simulated_time(make_worker) -> None:
 def test_go_home_walks_back_to_the_start_pose(make_worker) -> None:
     worker = make_worker(realtime=False, perception=True, max_auto_replans=0)
     home = worker.layout.robot_start
-    plan = {"steps": [{"action": "navigate_to", "target": f"{home[0] + 0.6:.2f}, {home[1] + 0.3:.2f}"},
-                      {"action": "go_home"}]}  # fmt: skip
+    plan = {
+        "steps": [
+            {"action": "navigate_to", "target": f"{home[0] + 0.6:.2f}, {home[1] + 0.3:.2f}"},
+            {"action": "go_home"},
+        ]
+    }
     state = _run(worker, worker.submit(ExecutePlan(plan)))
     assert state.plan.state == PlanState.SUCCEEDED, [s.detail for s in state.plan.steps]
     assert state.plan.steps[1].detail.startswith("home: at ")

@@ -74,18 +74,51 @@ def postgres_server(database: str = "test") -> Iterator[str]:
     log = open(os.path.join(folder, "postgres.log"), "wb")  # noqa: SIM115
     process: subprocess.Popen | None = None
     try:
-        initdb = [str(bin_dir / "initdb"), "-D", data, "-U", "postgres", "-A", "trust", "-E", "UTF8", "--locale=C",
-                  "--no-sync"]  # fmt: skip
+        initdb = [
+            str(bin_dir / "initdb"),
+            "-D",
+            data,
+            "-U",
+            "postgres",
+            "-A",
+            "trust",
+            "-E",
+            "UTF8",
+            "--locale=C",
+            "--no-sync",
+        ]
         subprocess.run(initdb, check=True, stdout=subprocess.DEVNULL, stderr=log, **as_user)
         port = 0
         for _ in range(5):  # another process may take the free port first
             port = _free_port()
             process = subprocess.Popen(
-                [str(bin_dir / "postgres"), "-D", data, "-h", "127.0.0.1", "-p", str(port), "-k", folder,
-                 "-c", "fsync=off", "-c", "synchronous_commit=off", "-c", "full_page_writes=off",
-                 "-c", "shared_buffers=32MB", "-c", "max_connections=50"],
-                stdout=log, stderr=log, preexec_fn=_die_with_parent, start_new_session=True, **as_user,
-            )  # fmt: skip
+                [
+                    str(bin_dir / "postgres"),
+                    "-D",
+                    data,
+                    "-h",
+                    "127.0.0.1",
+                    "-p",
+                    str(port),
+                    "-k",
+                    folder,
+                    "-c",
+                    "fsync=off",
+                    "-c",
+                    "synchronous_commit=off",
+                    "-c",
+                    "full_page_writes=off",
+                    "-c",
+                    "shared_buffers=32MB",
+                    "-c",
+                    "max_connections=50",
+                ],
+                stdout=log,
+                stderr=log,
+                preexec_fn=_die_with_parent,
+                start_new_session=True,
+                **as_user,
+            )
             deadline = time.monotonic() + STARTUP_TIMEOUT_S
             while process.poll() is None and time.monotonic() < deadline:
                 ready = subprocess.run([str(bin_dir / "pg_isready"), "-q", "-h", "127.0.0.1", "-p", str(port)])
@@ -97,8 +130,9 @@ def postgres_server(database: str = "test") -> Iterator[str]:
         if process is None or process.poll() is not None:
             log.flush()
             raise PostgresUnavailable("postgres did not start:\n" + Path(log.name).read_text()[-2000:])
-        subprocess.run([str(bin_dir / "createdb"), "-h", "127.0.0.1", "-p", str(port), "-U", "postgres", database],
-                       check=True)  # fmt: skip
+        subprocess.run(
+            [str(bin_dir / "createdb"), "-h", "127.0.0.1", "-p", str(port), "-U", "postgres", database], check=True
+        )
         yield f"postgresql+psycopg://postgres@127.0.0.1:{port}/{database}"
     finally:
         if process is not None and process.poll() is None:
