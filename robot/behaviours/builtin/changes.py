@@ -1,0 +1,92 @@
+"""What a patrol notices: cells of the lidar map that were first seen free and are now taken (a new obstacle),
+and objects the world memory now places elsewhere than where this patrol first saw them (an object moved)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from robot.interface import KnownObject, OccupancyMap
+
+FREE_AT_MOST = 25  # a cell first seen at or below this (0-100) was free
+TAKEN_AT_LEAST = 67  # ... and is now an obstacle at or above this
+MIN_CELLS = 3  # fewer new cells together are lidar noise
+SAME_OBSTACLE_M = 0.35  # a new obstacle this close to one reported already is that one
+MOVED_M = 0.15  # an object seen this far from where it was first seen has moved
+
+
+@dataclass(frozen=True)
+class NewObstacle:
+    x: float
+    y: float
+    cells: int
+
+
+@dataclass
+class ChangeWatch:
+    """Remembers the map and the objects as first seen, and tells what is new since (each change once)."""
+
+    first: np.ndarray | None = None  # the first known value of each cell (-1: not yet known)
+    shape: tuple[int, int, float, float, float] | None = None
+    reported: list[tuple[float, float]] = field(default_factory=list)
+    objects: dict[str, tuple[float, float]] = field(default_factory=dict)
+    moved: set[str] = field(default_factory=set)
+
+    def new_obstacles(self, grid: OccupancyMap | None) -> list[NewObstacle]:
+        if grid is None:
+            return []
+        cells = np.frombuffer(grid.data, dtype=np.int8).reshape(grid.height, grid.width).astype(np.int16)
+        shape = (grid.width, grid.height, grid.resolution, *grid.origin)
+        if self.first is None or self.shape != shape:
+            self.first, self.shape = cells.copy(), shape
+            return []
+        unknown = self.first < 0
+        self.first[unknown] = cells[unknown]
+        fresh = (self.first >= 0) & (self.first <= FREE_AT_MOST) & (cells >= TAKEN_AT_LEAST)
+        found = []
+        for members in _clusters(fresh):
+            if len(members) < MIN_CELLS:
+                continue
+            j, i = np.mean(members, axis=0)
+            x = grid.origin[0] + (i + 0.5) * grid.resolution
+            y = grid.origin[1] + (j + 0.5) * grid.resolution
+            if any(math.dist((x, y), seen) < SAME_OBSTACLE_M for seen in self.reported):
+                continue
+            self.reported.append((x, y))
+            found.append(NewObstacle(float(x), float(y), len(members)))
+        return found
+
+    def moved_objects(self, known: tuple[KnownObject, ...]) -> list[tuple[KnownObject, float]]:
+        """Objects now remembered away from where this patrol first saw them, with how far (m)."""
+        moved = []
+        for obj in known:
+            first = self.objects.setdefault(obj.name, obj.position[:2])
+            distance = math.dist(first, obj.position[:2])
+            if distance > MOVED_M and obj.name not in self.moved:
+                self.moved.add(obj.name)
+                moved.append((obj, distance))
+        return moved
+
+
+def _clusters(mask: np.ndarray) -> list[list[tuple[int, int]]]:
+    """8-connected groups of True cells, as (row, column) lists."""
+    seen = np.zeros_like(mask, dtype=bool)
+    groups = []
+    for start in zip(*np.nonzero(mask), strict=True):
+        if seen[start]:
+            continue
+        group, stack = [], [start]
+        seen[start] = True
+        while stack:
+            r, c = stack.pop()
+            group.append((int(r), int(c)))
+            for dr in (-1, 0, 1):
+                for dc in (-1, 0, 1):
+                    n = (r + dr, c + dc)
+                    if 0 <= n[0] < mask.shape[0] and 0 <= n[1] < mask.shape[1] and mask[n] and not seen[n]:
+                        seen[n] = True
+                        stack.append(n)
+        groups.append(group)
+    return groups
