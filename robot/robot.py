@@ -361,7 +361,7 @@ class Robot(InProcessPort):
             handlers |= {
                 StartBehaviour: behaviours.start,
                 StopBehaviour: behaviours.stop,
-                PauseBehaviour: lambda command: behaviours.pause(),
+                PauseBehaviour: behaviours.pause,
                 ResumeBehaviour: lambda command: behaviours.resume(),
             }
         if self.body.resettable:

@@ -28,6 +28,7 @@ from robot.interface import (
     BehaviourStatus,
     CommandReply,
     Level,
+    PauseBehaviour,
     Plan,
     PlanState,
     Refusal,
@@ -44,7 +45,7 @@ from robot.skills.catalogue import Skills
 from robot.tasks.runner import TaskRunner
 
 BEHAVIOUR_ACTION = "behaviour"  # the one step of the plan a behaviour runs as
-MAX_FEEDBACK_LINES = 50  # kept in the status (the session keeps them all, as events)
+MAX_FEEDBACK_LINES = 200  # kept in the status (the session keeps them all, as events)
 STEP_EXIT_WALL_S = 5.0  # how long a stopped step's thread may take to notice it was stopped
 SETTLE_SIM_S = 10.0  # making the robot safe after a behaviour may take this long
 
@@ -65,6 +66,7 @@ class Run:
     command_id: int | None = None
     ended_sim_s: float | None = None
     stop_reason: str | None = None  # set when the operator stopped it
+    pause_reason: str = ""
     inbox: list[str] = field(default_factory=list)  # commands said to a behaviour that listens, oldest first
 
     @property
@@ -192,7 +194,7 @@ class BehaviourRunner:
         if intent.action == "stop":
             return self.stop(StopBehaviour())
         if intent.action == "pause":
-            return self.pause()
+            return self.pause(PauseBehaviour())
         return self.resume()
 
     def start(self, command: StartBehaviour) -> CommandReply:
@@ -247,11 +249,12 @@ class BehaviourRunner:
         self._p.tasks.cancel(command.reason)
         return CommandReply(True, f"stopping the {run.name} behaviour", command_id=run.command_id)
 
-    def pause(self) -> CommandReply:
+    def pause(self, command: PauseBehaviour) -> CommandReply:
         with self._lock:
             run = self.active()
             if run is None or run.state != BehaviourState.RUNNING:
                 return CommandReply(False, "no behaviour is running", Refusal.NOTHING_TO_DO)
+            run.pause_reason = command.reason
         reply = self._p.tasks.pause()
         return replace(reply, message=f"pausing the {run.name} behaviour") if reply.accepted else reply
 
@@ -376,7 +379,12 @@ class BehaviourRunner:
             self._make_safe()
             with self._lock:
                 run.state = BehaviourState.PAUSED
-            self._publish("behaviour/paused", f"behaviour {run.name} paused in {run.machine_state}", run_id=run.run_id)
+            self._publish(
+                "behaviour/paused",
+                f"behaviour {run.name} {run.pause_reason or 'paused'} (in {run.machine_state})",
+                run_id=run.run_id,
+                reason=run.pause_reason,
+            )
             return
         moved = self._make_safe()
         with self._lock:

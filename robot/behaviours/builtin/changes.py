@@ -1,5 +1,7 @@
-"""What a patrol notices: cells of the lidar map that were first seen free and are now taken (a new obstacle),
-and objects the world memory now places elsewhere than where this patrol first saw them (an object moved)."""
+"""What a patrol notices: cells of the lidar map that were free once the first lap was done and are now taken (a
+new obstacle), and objects the world memory now places elsewhere than where this patrol first saw them (an object
+moved). The first lap only learns: a map seen once, from afar, marks the edges of furniture free where grazing
+rays passed them, and those are not new."""
 
 from __future__ import annotations
 
@@ -10,7 +12,7 @@ import numpy as np
 
 from robot.interface import KnownObject, OccupancyMap
 
-FREE_AT_MOST = 25  # a cell first seen at or below this (0-100) was free
+FREE_AT_MOST = 20  # a cell at or below this (0-100) when the lap was learnt was free
 TAKEN_AT_LEAST = 67  # ... and is now an obstacle at or above this
 MIN_CELLS = 3  # fewer new cells together are lidar noise
 SAME_OBSTACLE_M = 0.35  # a new obstacle this close to one reported already is that one
@@ -28,22 +30,24 @@ class NewObstacle:
 class ChangeWatch:
     """Remembers the map and the objects as first seen, and tells what is new since (each change once)."""
 
-    first: np.ndarray | None = None  # the first known value of each cell (-1: not yet known)
+    first: np.ndarray | None = None  # each cell as learnt (-1: not known then, so never judged)
     shape: tuple[int, int, float, float, float] | None = None
     reported: list[tuple[float, float]] = field(default_factory=list)
     objects: dict[str, tuple[float, float]] = field(default_factory=dict)
     moved: set[str] = field(default_factory=set)
 
+    def learn(self, grid: OccupancyMap | None) -> None:
+        """The map as it is now is how the place should look (during the first lap)."""
+        if grid is not None:
+            self.first, self.shape = _cells(grid), _shape(grid)
+
     def new_obstacles(self, grid: OccupancyMap | None) -> list[NewObstacle]:
         if grid is None:
             return []
-        cells = np.frombuffer(grid.data, dtype=np.int8).reshape(grid.height, grid.width).astype(np.int16)
-        shape = (grid.width, grid.height, grid.resolution, *grid.origin)
-        if self.first is None or self.shape != shape:
-            self.first, self.shape = cells.copy(), shape
+        cells = _cells(grid)
+        if self.first is None or self.shape != _shape(grid):
+            self.first, self.shape = cells, _shape(grid)
             return []
-        unknown = self.first < 0
-        self.first[unknown] = cells[unknown]
         fresh = (self.first >= 0) & (self.first <= FREE_AT_MOST) & (cells >= TAKEN_AT_LEAST)
         found = []
         for members in _clusters(fresh):
@@ -68,6 +72,14 @@ class ChangeWatch:
                 self.moved.add(obj.name)
                 moved.append((obj, distance))
         return moved
+
+
+def _cells(grid: OccupancyMap) -> np.ndarray:
+    return np.frombuffer(grid.data, dtype=np.int8).reshape(grid.height, grid.width).astype(np.int16)
+
+
+def _shape(grid: OccupancyMap) -> tuple[int, int, float, float, float]:
+    return (grid.width, grid.height, grid.resolution, *grid.origin)
 
 
 def _clusters(mask: np.ndarray) -> list[list[tuple[int, int]]]:

@@ -66,13 +66,15 @@ class Patrol(Behaviour):
         if not names:
             raise BehaviourFailed("no waypoints to patrol")
         self.route = [(n, points[n]) for n in names]
-        self.watch.new_obstacles(robot.occupancy())  # the map as the patrol starts
+        self.watch.learn(robot.occupancy())  # the map as the patrol starts (the first lap refines it)
         self.watch.moved_objects(robot.known_objects())
         robot.feedback("patrol route: " + " -> ".join(names))
         return "walking"
 
     def _report_changes(self, robot: BehaviourRobot) -> None:
-        for obstacle in self.watch.new_obstacles(robot.occupancy()):
+        if self.lap == 0:
+            self.watch.learn(robot.occupancy())
+        for obstacle in [] if self.lap == 0 else self.watch.new_obstacles(robot.occupancy()):
             robot.look_at((obstacle.x, obstacle.y, OBSTACLE_LOOK_HEIGHT_M))
             robot.snapshot(
                 f"a new obstacle near ({obstacle.x:.2f}, {obstacle.y:.2f})",
