@@ -47,7 +47,7 @@ class Judge:
     points: dict[str, tuple[float, float]] = field(default_factory=dict)
     visits: dict[str, int] = field(default_factory=dict)
     near: dict[str, bool] = field(default_factory=dict)
-    collisions: list[str] = field(default_factory=list)
+    collisions: list[dict[str, Any]] = field(default_factory=list)  # what touched what, first at (sim s)
 
     def __post_init__(self) -> None:
         import mujoco
@@ -61,7 +61,7 @@ class Judge:
         self._ground = {mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, n) for n in GROUND_GEOMS}
 
     def watch(self, state: Any) -> None:
-        self._contacts(state.held_object)
+        self._contacts(state.held_object, state.sim_time_s)
         x, y = state.base_position[:2]
         for name, point in self.points.items():
             distance = math.dist((x, y), point)
@@ -71,7 +71,7 @@ class Judge:
             elif distance > AWAY_M:
                 self.near[name] = False
 
-    def _contacts(self, held: str | None) -> None:
+    def _contacts(self, held: str | None, sim_time_s: float) -> None:
         """The contacts now (read beside the control thread stepping the simulation: a copy, taken whole or not)."""
         model, data = self.backend.model, self.backend.data
         try:
@@ -88,8 +88,9 @@ class Judge:
             if held is not None and body == "obj_" + held.replace(" ", "_"):
                 continue
             what = model.geom(int(other)).name or body
-            if what not in self.collisions:
-                self.collisions.append(what)
+            touched = f"{model.body(int(model.geom_bodyid[mine])).name} with {what}"
+            if not any(c["what"] == touched for c in self.collisions):
+                self.collisions.append({"what": touched, "sim_s": round(sim_time_s, 2)})
 
 
 def run_one(behaviour: str, seed: int) -> dict[str, Any]:
