@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import pytest
+from wave_hello.behaviour import WaveHello
 
 from robot.behaviours.api import BadParameter
-from wave_hello.behaviour import WaveHello
 
 
 class StandInRobot:
