@@ -1,7 +1,8 @@
 """What a patrol notices: cells of the lidar map that were free once the first lap was done and are now taken (a
 new obstacle), and objects the world memory now places elsewhere than where this patrol first saw them (an object
 moved). The first lap only learns: a map seen once, from afar, marks the edges of furniture free where grazing
-rays passed them, and those are not new."""
+rays passed them, and those are not new; nor is an obstacle that grows at its edge (cells taken within
+`EDGE_CELLS` of what was taken), so a box dropped against a wall goes unreported."""
 
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ from robot.interface import KnownObject, OccupancyMap
 FREE_AT_MOST = 20  # a cell at or below this (0-100) when the lap was learnt was free
 TAKEN_AT_LEAST = 67  # ... and is now an obstacle at or above this
 MIN_CELLS = 3  # fewer new cells together are lidar noise
+EDGE_CELLS = 2  # new cells this close to cells taken when the lap was learnt are that obstacle's edge
 SAME_OBSTACLE_M = 0.35  # a new obstacle this close to one reported already is that one
 MOVED_M = 0.15  # an object seen this far from where it was first seen has moved
 
@@ -49,6 +51,7 @@ class ChangeWatch:
             self.first, self.shape = cells, _shape(grid)
             return []
         fresh = (self.first >= 0) & (self.first <= FREE_AT_MOST) & (cells >= TAKEN_AT_LEAST)
+        fresh &= ~_grown(self.first >= TAKEN_AT_LEAST, EDGE_CELLS)
         found = []
         for members in _clusters(fresh):
             if len(members) < MIN_CELLS:
@@ -80,6 +83,17 @@ def _cells(grid: OccupancyMap) -> np.ndarray:
 
 def _shape(grid: OccupancyMap) -> tuple[int, int, float, float, float]:
     return (grid.width, grid.height, grid.resolution, *grid.origin)
+
+
+def _grown(mask: np.ndarray, cells: int) -> np.ndarray:
+    """`mask` grown by `cells` in every direction (a square)."""
+    padded = np.pad(mask, cells)
+    rows, cols = mask.shape
+    grown = np.zeros_like(mask)
+    for dr in range(2 * cells + 1):
+        for dc in range(2 * cells + 1):
+            grown |= padded[dr : dr + rows, dc : dc + cols]
+    return grown
 
 
 def _clusters(mask: np.ndarray) -> list[list[tuple[int, int]]]:
