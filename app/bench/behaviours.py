@@ -169,7 +169,13 @@ def _truth(
         laps = int(result["params"].get("laps", 2))
         reached = sum(min(judge.visits.get(name, 0), laps) for name in judge.points)
         total = laps * len(judge.points)
-        return {"ok": reached == total and not judge.collisions, "waypoints_reached": reached, "waypoints": total}
+        reported = [line for line in result["feedback"] if line.startswith("a new obstacle") or " moved " in line]
+        return {
+            "ok": reached == total and not judge.collisions,
+            "waypoints_reached": reached,
+            "waypoints": total,
+            "changes_reported": reported,
+        }
     if behaviour == "tour":
         presented = sum(1 for line in result["feedback"] if line.startswith("at the "))
         stood = sum(1 for name in judge.points if judge.visits.get(name, 0) > 0)

@@ -30,7 +30,7 @@ class Demo(Behaviour):
 
     def __init__(self, params: dict) -> None:
         super().__init__(params)
-        self.gestures = ["wave", "nod", "shake_head", "point"]
+        self.gestures = ["nod", "shake_head", "point", "wave"]  # it greeted with a wave: that comes last
         self.done: list[str] = []
         self.round = 0
 
