@@ -353,7 +353,7 @@ class Robot(InProcessPort):
                 PausePlan: lambda command: runner.pause(),
                 ResumePlan: lambda command: runner.resume(),
                 SetApproval: lambda command: runner.set_approval(command.required),
-                Teleop: self.motion.teleop,
+                Teleop: lambda command: self._behaviours().teleop_refusal() or self.motion.teleop(command),
                 StopTeleop: self.motion.stop_teleop,
             }
         behaviours = self.behaviours

@@ -175,6 +175,15 @@ class BehaviourRunner:
             False, f"the {run.name} behaviour is {run.state.value}: stop it first", Refusal.BUSY, (f"{run.name} busy",)
         )
 
+    def teleop_refusal(self) -> CommandReply | None:
+        """Teleop waits while a behaviour runs (paused, the operator may drive, as with a paused plan)."""
+        run = self.active()
+        if run is None or run.state == BehaviourState.PAUSED:
+            return None
+        return CommandReply(
+            False, f"the {run.name} behaviour is running: pause or stop it to teleoperate", Refusal.BUSY
+        )
+
     # ---------------------------------------------------------------------------------------------------------
     # the operator's controls
 

@@ -132,7 +132,8 @@ def test_a_running_behaviour_excludes_plans_teleop_and_another_behaviour(make_wo
     assert worker.wait_for(behaviour_is(BehaviourState.RUNNING), 20.0)
     plan = worker.submit(RunCommand("say hello"))
     assert plan.refusal == Refusal.BUSY and "count behaviour is running" in plan.message
-    assert worker.submit(Teleop(0.1, 0.0, 0.0)).refusal == Refusal.BUSY
+    teleop = worker.submit(Teleop(0.1, 0.0, 0.0))
+    assert teleop.refusal == Refusal.BUSY and "count behaviour is running" in teleop.message
     assert worker.submit(StartBehaviour("count")).refusal == Refusal.BUSY
     assert worker.submit(StopBehaviour()).accepted
     assert worker.wait_for(behaviour_is(BehaviourState.STOPPED), 20.0)
