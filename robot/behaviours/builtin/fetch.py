@@ -13,6 +13,7 @@ from robot.behaviours.robot_view import BehaviourRobot
 START = "start"
 # A place lower than this is floor-level (the dock's mat): the object is handed over there, not put down.
 MIN_SURFACE_M = 0.05
+MAX_PICK_ATTEMPTS = 2
 
 
 class Fetch(Behaviour):
@@ -29,6 +30,7 @@ class Fetch(Behaviour):
         self.candidates: list[str] = []
         self.tried = 0
         self.found_at: str | None = None
+        self.pick_attempts = 0
 
     def step(self, state: str, robot: BehaviourRobot) -> str | None:
         obj = self.params["object"]
@@ -37,11 +39,7 @@ class Fetch(Behaviour):
         if state == "searching":
             return self._search(obj, robot)
         if state == "picking":
-            robot.feedback(f"picking up the {obj}")
-            robot.go_to(self.found_at or self.candidates[self.tried], to_pick=obj)
-            robot.pick(obj)
-            robot.progress(0.6)
-            return "carrying"
+            return self._pick(obj, robot)
         destination = self._destination(robot)
         if state == "carrying":
             robot.feedback(f"carrying the {obj} to {_named(destination)}")
@@ -86,6 +84,22 @@ class Fetch(Behaviour):
         self.candidates = first + nearest_first((x, y), rest)
         robot.feedback(f"looking for the {obj}: " + ", then ".join(f"the {p}" for p in self.candidates))
         return "searching"
+
+    def _pick(self, obj: str, robot: BehaviourRobot) -> str:
+        """Pick it up; a grasp that fails is tried again once, after looking for the object anew (it may have been
+        nudged)."""
+        robot.feedback(f"picking up the {obj}")
+        self.pick_attempts += 1
+        try:
+            robot.go_to(self.found_at or self.candidates[self.tried], to_pick=obj)
+            robot.pick(obj)
+        except BehaviourFailed as exc:
+            if self.pick_attempts >= MAX_PICK_ATTEMPTS or robot.holding is not None:
+                raise
+            robot.feedback(f"the pick failed ({exc}): looking again")
+            return "searching"
+        robot.progress(0.6)
+        return "carrying"
 
     def _search(self, obj: str, robot: BehaviourRobot) -> str:
         while self.tried < len(self.candidates):

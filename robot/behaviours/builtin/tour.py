@@ -4,7 +4,7 @@ memory)."""
 
 from __future__ import annotations
 
-from robot.behaviours.api import Behaviour, Param
+from robot.behaviours.api import Behaviour, BehaviourFailed, Param
 from robot.behaviours.builtin.routes import nearest_first
 from robot.behaviours.robot_view import BehaviourRobot
 
@@ -20,6 +20,7 @@ class Tour(Behaviour):
         self.route: list[str] = []
         self.stop = 0
         self.said: list[str] = []
+        self.skipped: list[str] = []
 
     def step(self, state: str, robot: BehaviourRobot) -> str | None:
         if state == "planning":
@@ -27,7 +28,13 @@ class Tour(Behaviour):
         place = self.route[self.stop]
         if state == "walking":
             robot.feedback(f"walking to the {place} (stop {self.stop + 1} of {len(self.route)})")
-            robot.go_to(place)
+            try:
+                robot.go_to(place)
+            except BehaviourFailed as exc:  # out of reach now (something in the way): on to the next stop, said
+                robot.feedback(f"could not reach the {place}: {exc}")
+                self.skipped.append(place)
+                self.stop += 1
+                return "walking" if self.stop < len(self.route) else self._end(robot)
             return "presenting"
         sentence = self._present(place, robot)
         robot.say(sentence)
@@ -35,7 +42,14 @@ class Tour(Behaviour):
         self.said.append(sentence)
         self.stop += 1
         robot.progress(self.stop / len(self.route))
-        return "walking" if self.stop < len(self.route) else None
+        return "walking" if self.stop < len(self.route) else self._end(robot)
+
+    def _end(self, robot: BehaviourRobot) -> None:
+        if len(self.skipped) == len(self.route):
+            raise BehaviourFailed("could not reach any place of the tour: " + ", ".join(self.skipped))
+        if self.skipped:
+            robot.say("I could not get to " + " or ".join(f"the {p}" for p in self.skipped) + " this time.")
+        return None
 
     def _plan(self, robot: BehaviourRobot) -> str:
         chosen = list(self.params["places"]) or list(robot.places)
