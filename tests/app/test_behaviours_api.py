@@ -160,3 +160,28 @@ def test_a_take_over_pauses_the_running_behaviour(two_operators) -> None:
         time.sleep(0.05)
     assert client.post("/api/behaviours/resume", headers=ada).status_code == 409  # ada no longer has control
     assert client.post("/api/behaviours/stop", headers=bob).status_code == 200
+
+
+def test_a_snapshot_in_the_timeline_links_to_the_camera_frame_of_its_moment() -> None:
+    from app.sessions.queries import build_timeline
+
+    def event(seq: int, kind: str, message: str, sim_time_s: float) -> dict:
+        data = {"run_id": 1}
+        return {
+            "seq": seq,
+            "kind": kind,
+            "level": 0,
+            "message": message,
+            "data": data,
+            "wall_time": f"t{seq}",
+            "sim_time_s": sim_time_s,
+        }
+
+    events = [
+        event(1, "behaviour/started", "behaviour patrol started", 1.0),
+        event(2, "behaviour/feedback", "lap 1", 2.0),
+        event(3, "behaviour/snapshot", "a new obstacle near (0.40, 0.22)", 81.25),
+    ]
+    items = build_timeline([], [], [], events, session_id=7)
+    assert [i["text"] for i in items] == ["behaviour patrol started", "a new obstacle near (0.40, 0.22)"]
+    assert items[1]["camera_url"] == "/api/sessions/7/camera.jpg?t=81.250" and items[1]["type"] == "behaviour"
