@@ -113,7 +113,9 @@ def run_one(behaviour: str, seed: int) -> dict[str, Any]:
         from app.bench.capstone import PathBlocker
 
         params = {"laps": 2}
-        judge.points = {p.name: p.staging for p in layout.places}
+        from robot.behaviours.builtin.routes import waypoint_near
+
+        judge.points = {p.name: waypoint_near(layout, p.staging) for p in layout.places}  # the patrol's waypoints
         keep = (*judge.points.values(), tuple(layout.robot_start[:2]))
         blocker = PathBlocker(worker, layout, keep_clear=keep, clear_m=0.45)
     elif behaviour == "tour":

@@ -12,6 +12,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from robot.behaviours.builtin.routes import waypoint_near
 from robot.behaviours.errors import BehaviourFailed
 from robot.behaviours.gestures import perform, set_arms
 from robot.interface import DetectedObject, KnownObject, OccupancyMap, Plan, Step
@@ -85,6 +86,10 @@ class BehaviourRobot:
         if place is None:
             raise BehaviourFailed(f"unknown place {name!r}")
         return place
+
+    def waypoint_near(self, point: tuple[float, float]) -> tuple[float, float]:
+        """Open floor near `point` with room to turn, clear of the walls and furniture the world model knows."""
+        return waypoint_near(self._layout, point)
 
     def pose(self) -> tuple[float, float, float]:
         """Where the robot believes it is on its map: x, y (m), heading (rad)."""

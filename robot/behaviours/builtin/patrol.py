@@ -1,4 +1,4 @@
-"""The patrol: walk a loop of waypoints (default: the open floor in front of every place, nearest first) for a
+"""The patrol: walk a loop of waypoints (default: the open floor near every place, nearest first) for a
 number of laps or until stopped, round obstacles (the navigator replans on the lidar map, so one dropped during the
 patrol is walked round), and report what changed (a new obstacle, an object moved) with a camera snapshot."""
 
@@ -61,7 +61,7 @@ class Patrol(Behaviour):
 
     def _plan(self, robot: BehaviourRobot) -> str:
         names = list(self.params["waypoints"]) or list(robot.places)
-        points = {n: robot.place(n).staging for n in names}
+        points = {n: robot.waypoint_near(robot.place(n).staging) for n in names}
         if not self.params["waypoints"]:
             x, y, _ = robot.pose()
             names = nearest_first((x, y), list(points.items()))
