@@ -20,7 +20,7 @@ class Tour(Behaviour):
         self.route: list[str] = []
         self.stop = 0
         self.said: list[str] = []
-        self.skipped: list[str] = []
+        self.skipped: list[tuple[str, str]] = []  # places it could not reach, and why
 
     def step(self, state: str, robot: BehaviourRobot) -> str | None:
         if state == "planning":
@@ -32,7 +32,7 @@ class Tour(Behaviour):
                 robot.go_to(place)
             except BehaviourFailed as exc:  # out of reach now (something in the way): on to the next stop, said
                 robot.feedback(f"could not reach the {place}: {exc}")
-                self.skipped.append(place)
+                self.skipped.append((place, str(exc)))
                 self.stop += 1
                 return "walking" if self.stop < len(self.route) else self._end(robot)
             return "presenting"
@@ -46,9 +46,10 @@ class Tour(Behaviour):
 
     def _end(self, robot: BehaviourRobot) -> None:
         if len(self.skipped) == len(self.route):
-            raise BehaviourFailed("could not reach any place of the tour: " + ", ".join(self.skipped))
+            reasons = "; ".join(f"the {place}: {why}" for place, why in self.skipped)
+            raise BehaviourFailed(f"could not reach any place of the tour ({reasons})")
         if self.skipped:
-            robot.say("I could not get to " + " or ".join(f"the {p}" for p in self.skipped) + " this time.")
+            robot.say("I could not get to " + " or ".join(f"the {p}" for p, _ in self.skipped) + " this time.")
         return None
 
     def _plan(self, robot: BehaviourRobot) -> str:
