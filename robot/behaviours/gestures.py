@@ -31,44 +31,6 @@ SHAKE_PAN_RAD = 0.45
 HEAD_REPEATS = 2
 
 
-# Both arms forward and in, elbows bent, for walking in tight places: the hands 10 cm up and no wider than the
-# shoulders (arms down, they stick out 24 cm either side and swing 4 cm above the floor). Further in, the wrists
-# meet in front and the shoulders overload pushing them together.
-TUCKED_ARMS = {
-    "l_sho_pitch": -0.6,
-    "r_sho_pitch": 0.6,
-    "l_sho_roll": 1.4,
-    "r_sho_roll": -1.4,
-    "l_el": -0.6,
-    "r_el": 0.6,
-}
-ARMS_MOVE_S = 1.2
-
-
-def arms_down() -> dict[str, float]:
-    stand = humanoid_v1.stand_posture()
-    return {n: stand[n] for n in TUCKED_ARMS}
-
-
-def set_arms(parts: BodyParts, ctx: ExecutionContext, tucked: bool) -> None:
-    """Fold both arms in (or put them back down) and walk on with them so."""
-    arm = parts.arm
-    if arm.held is not None:
-        raise StepFailed(f"holding the {arm.held}: the arms stay as they carry it")
-    while parts.legs.moving:
-        ctx.wait_sim(0.02)
-    motion = arm.take()
-    motion.queue(
-        JointMove(dict(TUCKED_ARMS) if tucked else arms_down(), ARMS_MOVE_S, "arms in" if tucked else "arms down")
-    )
-    try:
-        while not motion.done.is_set():
-            ctx.wait_sim(0.02)
-    finally:
-        motion.stop()
-    arm.release(motion.targets if tucked else None)
-
-
 def arm_down() -> dict[str, float]:
     stand = humanoid_v1.stand_posture()
     return {n: stand[n] for n in ("r_sho_pitch", "r_sho_roll", "r_el", "r_wrist")}

@@ -14,7 +14,7 @@ import numpy as np
 
 from robot.behaviours.builtin.routes import waypoint_near
 from robot.behaviours.errors import BehaviourFailed
-from robot.behaviours.gestures import perform, set_arms
+from robot.behaviours.gestures import perform
 from robot.interface import DetectedObject, KnownObject, OccupancyMap, Plan, Step
 from robot.model.world import Place, WorldLayout
 from robot.perception.geometry import yaw_of
@@ -35,10 +35,6 @@ class Reporter(Protocol):
     def snapshot(self, message: str, data: dict[str, Any]) -> None: ...
 
     def next_command(self) -> str | None: ...
-
-    def arms_tucked(self) -> bool: ...
-
-    def set_arms_tucked(self, tucked: bool) -> None: ...
 
 
 class BehaviourRobot:
@@ -199,18 +195,6 @@ class BehaviourRobot:
             return perform(name, self._parts, self._ctx, aim if at is not None else None)
         except StepFailed as exc:
             raise BehaviourFailed(str(exc)) from exc
-
-    def tuck_arms(self, tucked: bool = True) -> None:
-        """Walk with both arms folded in front (narrower, hands clear of the floor), or put them back down. The
-        runner puts them down when the behaviour ends or pauses."""
-        self._ctx.check_cancelled()
-        if self._reporter.arms_tucked() == tucked:
-            return
-        try:
-            set_arms(self._parts, self._ctx, tucked)
-        except StepFailed as exc:
-            raise BehaviourFailed(str(exc)) from exc
-        self._reporter.set_arms_tucked(tucked)
 
     # ---------------------------------------------------------------------------------------------------------
     # commands (a behaviour that `listens`)

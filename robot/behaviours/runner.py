@@ -17,7 +17,6 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from robot.behaviours.api import BadParameter, Behaviour, BehaviourFailed
-from robot.behaviours.gestures import set_arms
 from robot.behaviours.intents import Intent, control_word, read_intent
 from robot.behaviours.registry import Registry
 from robot.behaviours.robot_view import BehaviourRobot
@@ -68,7 +67,6 @@ class Run:
     ended_sim_s: float | None = None
     stop_reason: str | None = None  # set when the operator stopped it
     pause_reason: str = ""
-    arms_tucked: bool = False  # the behaviour walks with its arms folded in: put down when it ends or pauses
     inbox: list[str] = field(default_factory=list)  # commands said to a behaviour that listens, oldest first
 
     @property
@@ -116,12 +114,6 @@ class RunReporter:
     def next_command(self) -> str | None:
         with self._lock:
             return self._run.inbox.pop(0) if self._run.inbox else None
-
-    def arms_tucked(self) -> bool:
-        return self._run.arms_tucked
-
-    def set_arms_tucked(self, tucked: bool) -> None:
-        self._run.arms_tucked = tucked
 
 
 @dataclass(frozen=True)
@@ -393,7 +385,7 @@ class BehaviourRunner:
             self._failed(run, fault)
             return
         if ctx.pausing():
-            self._make_safe(run)
+            self._make_safe()
             with self._lock:
                 run.state = BehaviourState.PAUSED
             self._publish(
@@ -403,13 +395,13 @@ class BehaviourRunner:
                 reason=run.pause_reason,
             )
             return
-        moved = self._make_safe(run)
+        moved = self._make_safe()
         with self._lock:
             reason = run.stop_reason or ("stopped by the e-stop" if not moved else "cancelled")
             self._end(run, BehaviourState.STOPPED, reason)
 
     def _failed(self, run: Run, reason: str) -> None:
-        self._make_safe(run)
+        self._make_safe()
         with self._lock:
             self._end(run, BehaviourState.FAILED, reason)
 
@@ -432,7 +424,7 @@ class BehaviourRunner:
             sim_s=round(run.ended_sim_s - run.started_sim_s, 3),
         )
 
-    def _make_safe(self, run: Run) -> bool:
+    def _make_safe(self) -> bool:
         """Leave the robot standing where it is, head ahead, arm stowed (carrying pose if it holds something);
         nothing moves under an e-stop or after a fall. Whether it could move."""
         parts = self._p.parts
@@ -452,9 +444,6 @@ class BehaviourRunner:
                 arm.release(arm.motion().targets)
             elif arm.active:
                 self._p.skills.manipulate.arm_body(ctx).stow_arm()
-            if run.arms_tucked and arm.held is None:
-                set_arms(parts, ctx, tucked=False)
-                run.arms_tucked = False
         return True
 
     def _safe_wait(self, seconds: float, cancel: threading.Event) -> None:

@@ -35,7 +35,6 @@ class Patrol(Behaviour):
             return self._plan(robot)
         name, (x, y) = self.route[self.index]
         if state == "walking":
-            robot.tuck_arms()  # narrower, hands off the floor: clear of furniture and what is dropped in the way
             robot.feedback(f"lap {self.lap + 1}: walking to the {name}")
             try:
                 robot.go_to(f"{x:.3f}, {y:.3f}")
@@ -54,7 +53,6 @@ class Patrol(Behaviour):
         if total:
             robot.progress((self.lap * len(self.route) + self.index) / total)
         if laps and self.lap >= laps:
-            robot.tuck_arms(False)
             robot.say(f"Patrol done: {laps} laps, {self.reached} waypoints reached.")
             return None
         return "walking"
