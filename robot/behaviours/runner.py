@@ -372,8 +372,10 @@ class BehaviourRunner:
                 step_cancel.set()
                 thread.join(STEP_EXIT_WALL_S)
         error = outcome.get("error")
-        if error is not None:
+        if isinstance(error, Exception):
             raise error
+        if error is not None:  # SystemExit and the like: they end the behaviour, never the task thread
+            raise BehaviourFailed(f"state {state!r} ended with {type(error).__name__}")
         return outcome.get("next")
 
     # ---------------------------------------------------------------------------------------------------------

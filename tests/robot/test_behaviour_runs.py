@@ -63,6 +63,15 @@ class Crash(Behaviour):
         raise ValueError("user bug")
 
 
+class Quit(Behaviour):
+    name = "quit"
+    description = "calls sys.exit in its step"
+    states = ("quitting",)
+
+    def step(self, state, robot):  # type: ignore[no-untyped-def]
+        raise SystemExit(3)
+
+
 class Hang(Behaviour):
     name = "hang"
     description = "a step that never returns (and never asks the robot anything)"
@@ -86,7 +95,7 @@ class Wave(Behaviour):
 
 @pytest.fixture
 def registry(monkeypatch: pytest.MonkeyPatch) -> Registry:
-    found = Registry({b.name: b for b in (Count, Crash, Hang, Wave)}, {}, {})
+    found = Registry({b.name: b for b in (Count, Crash, Quit, Hang, Wave)}, {}, {})
     monkeypatch.setattr(robot_module, "discover", lambda: found)
     return found
 
@@ -187,6 +196,15 @@ def test_an_exception_in_user_code_ends_the_behaviour_with_the_reason(make_worke
     assert "ValueError: user bug" in state.behaviour.reason
     assert not state.fallen and worker.is_alive()
     assert worker.submit(RunCommand("say hello")).accepted  # the robot takes commands again
+
+
+def test_a_step_that_exits_ends_the_behaviour_not_the_robot(make_worker, registry) -> None:
+    worker = make_worker(realtime=False)
+    assert worker.submit(StartBehaviour("quit")).accepted
+    assert worker.wait_for(behaviour_is(BehaviourState.FAILED), 30.0)
+    assert "SystemExit" in worker.state().behaviour.reason
+    assert worker.is_alive() and worker.submit(StartBehaviour("count", {"to": 1})).accepted
+    assert worker.wait_for(behaviour_is(BehaviourState.SUCCEEDED), 30.0)
 
 
 def test_a_step_that_overruns_its_timeout_ends_the_behaviour(make_worker, registry) -> None:
