@@ -113,7 +113,7 @@ def run_one(behaviour: str, seed: int) -> dict[str, Any]:
         from app.bench.capstone import PathBlocker
 
         params = {"laps": 2}
-        from robot.behaviours.builtin.routes import waypoint_near
+        from robot.behaviours.routes import waypoint_near
 
         judge.points = {p.name: waypoint_near(layout, p.staging) for p in layout.places}  # the patrol's waypoints
         keep = (*judge.points.values(), tuple(layout.robot_start[:2]))

@@ -12,9 +12,9 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from robot.behaviours.builtin.routes import waypoint_near
 from robot.behaviours.errors import BehaviourFailed
 from robot.behaviours.gestures import perform
+from robot.behaviours.routes import waypoint_near
 from robot.interface import DetectedObject, KnownObject, OccupancyMap, Plan, Step
 from robot.model.world import Place, WorldLayout
 from robot.perception.geometry import yaw_of

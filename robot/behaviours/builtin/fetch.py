@@ -7,8 +7,8 @@ from __future__ import annotations
 import math
 
 from robot.behaviours.api import Behaviour, BehaviourFailed, Param
-from robot.behaviours.builtin.routes import nearest_first
 from robot.behaviours.robot_view import BehaviourRobot
+from robot.behaviours.routes import nearest_first
 
 START = "start"
 # A place lower than this is floor-level (the dock's mat): the object is handed over there, not put down.

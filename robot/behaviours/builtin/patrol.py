@@ -6,8 +6,8 @@ from __future__ import annotations
 
 from robot.behaviours.api import Behaviour, BehaviourFailed, Param
 from robot.behaviours.builtin.changes import ChangeWatch
-from robot.behaviours.builtin.routes import nearest_first
 from robot.behaviours.robot_view import BehaviourRobot
+from robot.behaviours.routes import nearest_first
 
 OBSTACLE_LOOK_HEIGHT_M = 0.15
 

@@ -5,8 +5,8 @@ memory)."""
 from __future__ import annotations
 
 from robot.behaviours.api import Behaviour, BehaviourFailed, Param
-from robot.behaviours.builtin.routes import nearest_first
 from robot.behaviours.robot_view import BehaviourRobot
+from robot.behaviours.routes import nearest_first
 
 
 class Tour(Behaviour):
