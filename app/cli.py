@@ -1,5 +1,5 @@
-"""The `humanoid` command: serve, run, transcribe, plan, estop, describe, sessions, hardware, users, db, service,
-doctor, bench."""
+"""The `humanoid` command: serve, run, behaviours, transcribe, plan, estop, describe, sessions, hardware, users, db,
+service, doctor, bench."""
 
 from __future__ import annotations
 
@@ -282,6 +282,47 @@ def _describe(args: argparse.Namespace, settings: Settings) -> int:
     return 0
 
 
+def _behaviours_list(args: argparse.Namespace, settings: Settings) -> int:
+    from app.headless_behaviour import list_behaviours
+
+    listed = list_behaviours()
+    if args.json:
+        print(json.dumps(listed, indent=2))
+        return 0
+    for info in listed["behaviours"]:
+        source = f" [{info['package']}]" if info["package"] else ""
+        print(f"{info['name']}{source}: {info['description']}")
+        for param in info["params"]:
+            print(f"  {param['name']} ({param['kind']}, default {param['default']!r}): {param['doc']}")
+    for point, reason in listed["broken"].items():
+        print(f"(not loaded: {point}: {reason})", file=sys.stderr)
+    return 0
+
+
+def _behaviours_run(args: argparse.Namespace, settings: Settings) -> int:
+    from app.headless_behaviour import parse_settings, run_behaviour
+
+    try:
+        params = parse_settings(args.set or [])
+    except ValueError as exc:
+        print(exc, file=sys.stderr)
+        return 2
+    result = run_behaviour(args.name, params, seed=args.seed, settings=settings, timeout_s=args.timeout)
+    if args.json:
+        print(json.dumps(result, indent=2))
+    else:
+        outcome = "SUCCESS" if result["success"] else "FAILED"
+        print(f"{outcome}: behaviour {args.name} (session {result['session_id']}): {result['state']}")
+        if result.get("reason") or result.get("error"):
+            print(f"  {result.get('error') or result['reason']}")
+        for line in result["feedback"]:
+            print(f"  - {line}")
+        print(f"  sim {result['sim_time_s']:.2f} s, wall {result['wall_time_s']:.2f} s, fell: {result['fell']}")
+    if "errors" in result:
+        return 2  # refused: an unknown behaviour or a bad parameter
+    return 0 if result["success"] else 1
+
+
 def _bench(args: argparse.Namespace, settings: Settings) -> int:
     from app.bench import run_suite
 
@@ -391,6 +432,24 @@ def build_parser() -> argparse.ArgumentParser:
     add_service_parser(sub)
     add_doctor_parser(sub)
 
+    behaviours = sub.add_parser("behaviours", help="list the installed behaviours, or run one headless")
+    behaviour_sub = behaviours.add_subparsers(dest="behaviours_command", required=True)
+    listing = behaviour_sub.add_parser("list", help="every behaviour: name, description, parameters")
+    listing.add_argument("--json", action="store_true", help="print the list as JSON")
+    listing.set_defaults(func=_behaviours_list)
+    running = behaviour_sub.add_parser("run", help="run one behaviour headless in simulation, recorded as a session")
+    running.add_argument("name", help="e.g. patrol, tour, fetch, demo")
+    running.add_argument("--seed", type=int, default=0)
+    running.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY=VALUE",
+        help="a parameter (repeat for more), e.g. --set laps=2 --set waypoints=dock,table",
+    )
+    running.add_argument("--json", action="store_true", help="print the result as JSON")
+    running.add_argument("--timeout", type=float, default=1800.0, help="wall-clock limit in seconds")
+    running.set_defaults(func=_behaviours_run)
+
     bench = sub.add_parser("bench", help="benchmarks, written as JSON")
     suites = [
         "core",
@@ -406,6 +465,7 @@ def build_parser() -> argparse.ArgumentParser:
         "diagnostics",
         "dynamixel",
         "network",
+        "behaviours",
     ]
     bench.add_argument("suite", choices=suites)
     bench.add_argument("--json", action="store_true", help="print the JSON result")
@@ -432,12 +492,22 @@ def build_parser() -> argparse.ArgumentParser:
         "--seeds",
         type=int,
         default=None,
-        help="perception: worlds to place the robot in (50); capstone: worlds per task (30)",
+        help="perception: worlds to place the robot in (50); capstone: worlds per task (30); behaviours: worlds per "
+        "behaviour and set (10)",
     )
     bench.add_argument(
         "--tasks", default="pick,bring,blocked", help="capstone: which tasks (pick, bring, blocked), comma-separated"
     )
-    bench.add_argument("--jobs", type=int, default=1, help="capstone: runs at once (1 measures wall time fairly)")
+    bench.add_argument(
+        "--jobs", type=int, default=1, help="capstone, behaviours: runs at once (1 measures wall time fairly)"
+    )
+    bench.add_argument(
+        "--behaviours", default=None, help="behaviours: which (patrol, tour, fetch, demo), comma-separated; default all"
+    )
+    bench.add_argument(
+        "--heldout-seed", type=int, default=100, help="behaviours: first seed of the held-out set (as many as --seeds)"
+    )
+    bench.add_argument("--no-heldout", action="store_true", help="behaviours: the development seeds only")
     bench.add_argument("--views", type=int, default=6, help="perception: viewpoints per world")
     bench.add_argument("--tours", type=int, default=5, help="perception: mapping tours (one world each)")
     bench.add_argument(

@@ -12,7 +12,7 @@ from fastapi.responses import FileResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from app.api import auth, diagnostics, perception, robot, scene, sessions, speech
+from app.api import auth, behaviours, diagnostics, perception, robot, scene, sessions, speech
 from app.auth.middleware import AccessMiddleware
 from app.foxglove import proxy as foxglove_proxy
 from app.runtime import Runtime
@@ -111,6 +111,7 @@ def create_app(settings: Settings | None = None, runtime: Runtime | None = None)
     app.add_exception_handler(RequestValidationError, _validation_error)
     app.include_router(auth.router)
     app.include_router(robot.router)
+    app.include_router(behaviours.router)
     app.include_router(perception.router)
     app.include_router(scene.router)
     app.include_router(sessions.router)

@@ -5,11 +5,26 @@ from __future__ import annotations
 import dataclasses
 from typing import Any
 
-from robot.interface import CommandReply, Event, PlanStatus, RobotState
+from robot.interface import BehaviourInfo, BehaviourStatus, CommandReply, Event, PlanStatus, RobotState
 
 
 def plan_status_json(plan: PlanStatus | None) -> dict[str, Any] | None:
     return dataclasses.asdict(plan) if plan is not None else None
+
+
+def behaviour_status_json(status: BehaviourStatus | None) -> dict[str, Any] | None:
+    return dataclasses.asdict(status) if status is not None else None
+
+
+def behaviour_info_json(info: BehaviourInfo) -> dict[str, Any]:
+    """A behaviour as listed (the CLI's `behaviours list`, the API, the page's panel)."""
+    return {
+        "name": info.name,
+        "description": info.description,
+        "states": list(info.states),
+        "package": info.package,
+        "params": [dataclasses.asdict(p) | {"extra": list(p.extra)} for p in info.params],
+    }
 
 
 def state_json(state: RobotState, include_qpos: bool = False) -> dict[str, Any]:
@@ -32,6 +47,7 @@ def state_json(state: RobotState, include_qpos: bool = False) -> dict[str, Any]:
         "navigation": dataclasses.asdict(state.navigation) if state.navigation is not None else None,
         "approval_required": state.approval_required,
         "torque_enabled": state.torque_enabled,
+        "behaviour": behaviour_status_json(state.behaviour),
     }
     if include_qpos:
         out["qpos"] = list(state.qpos)

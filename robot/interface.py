@@ -257,9 +257,41 @@ class ResetRobot:
     """Simulation only: put the robot back standing at its start pose (after a fall, or to start over)."""
 
 
+@dataclass(frozen=True)
+class StartBehaviour:
+    """Start a behaviour (a long-running mission, `robot.behaviours`) by name, with its parameters (by name; values
+    as JSON gives them, or as text from a command line: checked against the behaviour's typed parameters)."""
+
+    name: str
+    params: dict[str, Any] = field(default_factory=dict)
+    source: str = "api"
+
+
+@dataclass(frozen=True)
+class StopBehaviour:
+    """End the running (or paused) behaviour: the robot stands where it is, its arm stowed."""
+
+    reason: str = "stopped by the operator"
+
+
+@dataclass(frozen=True)
+class PauseBehaviour:
+    """Interrupt the running behaviour and stand still; it goes on from its state on resume."""
+
+    reason: str = "paused by the operator"
+
+
+@dataclass(frozen=True)
+class ResumeBehaviour:
+    pass
+
+
+BehaviourCommand = StartBehaviour | StopBehaviour | PauseBehaviour | ResumeBehaviour
+
+
 PlanCommand = RunCommand | ExecutePlan | Replan | CancelPlan | ApprovePlan | PausePlan | ResumePlan | SetApproval
 MotionCommand = Teleop | StopTeleop | SetPosture | ResetRobot | PlaceObstacle | InjectFault | SetTorque
-Command = PlanCommand | MotionCommand | EStop | ReleaseEStop | OperatorHeartbeat
+Command = PlanCommand | MotionCommand | BehaviourCommand | EStop | ReleaseEStop | OperatorHeartbeat
 
 
 class Refusal(StrEnum):
@@ -469,6 +501,62 @@ class PowerState:
     power_w: float
 
 
+class BehaviourState(StrEnum):
+    QUEUED = "queued"
+    RUNNING = "running"
+    PAUSED = "paused"
+    SUCCEEDED = "succeeded"
+    FAILED = "failed"
+    STOPPED = "stopped"  # by the operator, the e-stop or a newer command
+
+    @property
+    def finished(self) -> bool:
+        return self in (BehaviourState.SUCCEEDED, BehaviourState.FAILED, BehaviourState.STOPPED)
+
+
+@dataclass(frozen=True)
+class BehaviourParam:
+    """One typed parameter of a behaviour: `kind` is "int" | "float" | "str" | "bool" | "list[str]"; `choices`:
+    the values a text parameter (or each list item) may take ("places", "objects": the world's names)."""
+
+    name: str
+    kind: str
+    default: Any
+    doc: str = ""
+    minimum: float | None = None
+    maximum: float | None = None
+    choices: str | None = None
+    extra: tuple[str, ...] = ()  # values allowed besides the choices
+
+
+@dataclass(frozen=True)
+class BehaviourInfo:
+    """A behaviour as the operator picks it: its name, what it does, its parameters and its states."""
+
+    name: str
+    description: str
+    params: tuple[BehaviourParam, ...] = ()
+    states: tuple[str, ...] = ()
+    package: str = ""  # the distribution it came from ("" for the built-ins)
+
+
+@dataclass(frozen=True)
+class BehaviourStatus:
+    """The behaviour running, paused or last run: its state machine's state, progress and feedback lines."""
+
+    run_id: int
+    name: str
+    params: dict[str, Any]
+    state: BehaviourState
+    machine_state: str  # the behaviour's own state (e.g. "searching", "carrying")
+    progress: float  # 0..1
+    feedback: tuple[str, ...]
+    reason: str = ""  # why it ended, when not with success
+    command_id: int | None = None  # the command it runs as (its plan is one `behaviour` step)
+    started_sim_s: float = 0.0
+    ended_sim_s: float | None = None
+
+
 @dataclass(frozen=True)
 class RobotState:
     """An immutable snapshot published by the control loop."""
@@ -494,6 +582,7 @@ class RobotState:
     approval_required: bool = False  # plans wait for the operator's approval before they run
     power: PowerState | None = None
     torque_enabled: bool | None = None  # the real robot's servos (None in simulation, where they are always on)
+    behaviour: BehaviourStatus | None = None  # the behaviour running, paused or last run
 
 
 _SEVERITY = {Level.OK: 0, Level.WARN: 1, Level.STALE: 2, Level.ERROR: 3}
@@ -568,6 +657,7 @@ class RobotDescription:
     speaker: str = ""
     telemetry_layout: dict[str, Any] = field(default_factory=dict)  # robot.telemetry.TelemetryLayout.to_json()
     telemetry_hz: float = 0.0
+    behaviours: tuple[BehaviourInfo, ...] = ()  # what `StartBehaviour` can start
 
 
 class EventSubscription(Protocol):

@@ -20,6 +20,8 @@ from typing import Any
 
 import numpy as np
 
+from robot.behaviours.registry import discover
+from robot.behaviours.runner import BEHAVIOUR_ACTION, BehaviourParts, BehaviourRunner
 from robot.config import RobotConfig
 from robot.control.gait import write_placo_model
 from robot.control.head import HeadController
@@ -47,12 +49,15 @@ from robot.interface import (
     Event,
     ExecutePlan,
     Level,
+    PauseBehaviour,
     PausePlan,
     PerceptionState,
+    Plan,
     Refusal,
     ReleaseEStop,
     Replan,
     ResetRobot,
+    ResumeBehaviour,
     ResumePlan,
     RobotDescription,
     RobotState,
@@ -60,6 +65,8 @@ from robot.interface import (
     SensorFeed,
     SetApproval,
     SetPosture,
+    StartBehaviour,
+    StopBehaviour,
     StopTeleop,
     Teleop,
 )
@@ -69,6 +76,7 @@ from robot.model import humanoid_v1
 from robot.model.scene import scene_xml
 from robot.model.world import WorldLayout
 from robot.parts import MapLocaliser, RobotArm, RobotLegs, SimClock
+from robot.planning.context import PlanningContext
 from robot.planning.executor import Capability, PlanExecutor
 from robot.planning.pipeline import PlannerConfig, PlanningPipeline, build_pipeline
 from robot.planning.world_context import WorldContext
@@ -149,6 +157,7 @@ class Robot(InProcessPort):
         self.arm = RobotArm(self.arbiter, lambda: body.latest().joint_positions)
         self.skills: Skills | None = None
         self.plans: PlanCommands | None = None
+        self.behaviours: BehaviourRunner | None = None
         if legs:
             assert locomotion is not None
             self._build_mission(locomotion, planning, capabilities)
@@ -252,8 +261,9 @@ class Robot(InProcessPort):
         )
         self.skills = build_skills(parts, self.layout, self._world_context, publish)
         arbiter = self.arbiter
+        skill_steps = capabilities or self.skills.capabilities(lambda ctx: arbiter.wait_arm_finished(ctx.wait_sim))
         executor = PlanExecutor(
-            capabilities or self.skills.capabilities(lambda ctx: arbiter.wait_arm_finished(ctx.wait_sim))
+            skill_steps | {BEHAVIOUR_ACTION: lambda args, ctx: self._behaviours().run_step(args, ctx)}
         )
 
         def refusal() -> CommandReply | None:
@@ -271,18 +281,45 @@ class Robot(InProcessPort):
             held_object=lambda: self.arm.held,
             approve_plans=self.config.approve_plans,
         )
+        latch = self.latch
+        behaviours = self.behaviours = BehaviourRunner(
+            discover(),
+            BehaviourParts(
+                parts,
+                self.skills,
+                skill_steps,
+                self.layout,
+                self._world_context,
+                runner,
+                lambda: not latch.latched and not latch.fallen,
+                refusal,
+                self._plan_text,
+            ),
+            self._lock,
+            publish,
+        )
         pipeline = planning if planning is not None else build_pipeline(self.config.planning or PlannerConfig())
         self.plans = PlanCommands(
             runner,
             pipeline,
             self._lock,
             self.latch,
-            refusal,
+            lambda: refusal() or behaviours.plan_refusal(),
             self._world_context,
             publish,
             self.config.max_auto_replans,
         )
         self.latch.on_latch(lambda: runner.cancel("cancelled by e-stop"))
+        self.latch.on_latch(behaviours.estopped)
+
+    def _behaviours(self) -> BehaviourRunner:
+        assert self.behaviours is not None
+        return self.behaviours
+
+    def _plan_text(self, text: str) -> Plan:
+        """A command's plan, as the planner reads it now (for a behaviour that takes commands)."""
+        assert self.plans is not None
+        return self.plans.planning.plan(text, PlanningContext(self._world_context())).plan
 
     def _mission_parts(self) -> MissionParts:
         assert self.runner is not None and self.skills is not None and self.inbox is not None
@@ -295,6 +332,7 @@ class Robot(InProcessPort):
             locomotion=self.locomotion,
             trunk=self.localiser.estimated_trunk,
             perception=self._perception_state,
+            behaviour=self.behaviours.status if self.behaviours is not None else None,
         )
 
     def _command_table(self) -> dict[type, CommandHandler]:
@@ -307,7 +345,7 @@ class Robot(InProcessPort):
         runner, plans = self.runner, self.plans
         if runner is not None and plans is not None:
             handlers |= {
-                RunCommand: plans.run_command,
+                RunCommand: lambda command: self._behaviours().take_command(command) or plans.run_command(command),
                 ExecutePlan: plans.execute_plan,
                 Replan: lambda command: plans.replan(),
                 CancelPlan: lambda command: runner.cancel("cancelled by operator"),
@@ -315,8 +353,16 @@ class Robot(InProcessPort):
                 PausePlan: lambda command: runner.pause(),
                 ResumePlan: lambda command: runner.resume(),
                 SetApproval: lambda command: runner.set_approval(command.required),
-                Teleop: self.motion.teleop,
+                Teleop: lambda command: self._behaviours().teleop_refusal() or self.motion.teleop(command),
                 StopTeleop: self.motion.stop_teleop,
+            }
+        behaviours = self.behaviours
+        if behaviours is not None:
+            handlers |= {
+                StartBehaviour: behaviours.start,
+                StopBehaviour: behaviours.stop,
+                PauseBehaviour: behaviours.pause,
+                ResumeBehaviour: lambda command: behaviours.resume(),
             }
         if self.body.resettable:
             handlers[ResetRobot] = self._reset
@@ -451,6 +497,7 @@ class Robot(InProcessPort):
                 planner=self._planner_name(),
                 telemetry_layout=telemetry.layout.to_json() if telemetry is not None else {},
                 telemetry_hz=telemetry.rate_hz if telemetry is not None else 0.0,
+                behaviours=self.behaviours.describe() if self.behaviours is not None else (),
             )
         if self._voice is None:
             return self._description

@@ -12,7 +12,9 @@ from app.auth.access import COOKIE_NAME, LOGIN_TTL_S, LoginThrottled
 from app.auth.control import ControlHeld
 from app.auth.roles import Principal, Role
 from app.auth.scene_tokens import login_id
+from app.robot_calls import ask
 from app.runtime import Runtime
+from robot.interface import PauseBehaviour
 
 router = APIRouter(prefix="/api", tags=["access"])
 RuntimeDep = Annotated[Runtime, Depends(runtime)]
@@ -84,15 +86,19 @@ def control(rt: RuntimeDep, _: PrincipalDep) -> dict[str, Any]:
 
 
 @router.post("/control/take")
-def take_control(body: TakeControlIn, rt: RuntimeDep, who: PrincipalDep) -> dict[str, Any]:
+async def take_control(body: TakeControlIn, rt: RuntimeDep, who: PrincipalDep) -> dict[str, Any]:
     """An operator takes control: free, theirs already, or (with take_over) from another operator. 409 when
-    another operator has it and take_over is false; 403 for a viewer."""
+    another operator has it and take_over is false; 403 for a viewer. Taken over from another operator, a running
+    behaviour pauses (the new operator resumes it, or not)."""
     if not who.role.allows(Role.OPERATOR):
         raise HTTPException(403, detail={"message": "only an operator can take control"})
+    previous = rt.control.holder
     try:
         rt.control.take(who, body.take_over)
     except ControlHeld as exc:
         raise HTTPException(409, detail={"message": str(exc), "holder": exc.holder.name}) from exc
+    if previous is not None and previous.name != who.name:
+        await ask(rt.worker, PauseBehaviour(f"paused: {who.name} took control over from {previous.name}"))
     return control_json(rt)
 
 

@@ -37,6 +37,18 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
             print(f"unknown capstone task(s) {unknown or args.tasks!r}: choose from {choices}", file=sys.stderr)
             return 2
         result = run_capstone(seeds=args.seeds or 30, seed=args.seed or 0, tasks=tasks, jobs=args.jobs)
+    elif suite == "behaviours":
+        from app.bench.behaviours import BEHAVIOURS, run_behaviours_bench
+
+        chosen = tuple(b.strip() for b in (args.behaviours or ",".join(BEHAVIOURS)).split(",") if b.strip())
+        unknown = [b for b in chosen if b not in BEHAVIOURS]
+        if unknown or not chosen:
+            print(f"unknown behaviour(s) {unknown or chosen!r}: choose from {', '.join(BEHAVIOURS)}", file=sys.stderr)
+            return 2
+        heldout = None if args.no_heldout else args.heldout_seed
+        result = run_behaviours_bench(
+            seeds=args.seeds or 10, seed=args.seed or 0, behaviours=chosen, jobs=args.jobs, heldout_seed=heldout
+        )
     elif suite == "speech":
         from app.bench.spoken import run_speech
 

@@ -60,7 +60,7 @@ def run_task(task: str, seed: int, timeout_s: float = 600.0) -> dict[str, Any]:
     try:
         worker.wait_for(lambda s: s.sim_time_s >= SETTLE_SIM_S, timeout_s)
         reply = worker.submit(RunCommand(TASKS[task]))
-        blocker = _PathBlocker(worker, layout) if task == "blocked" else None
+        blocker = PathBlocker(worker, layout) if task == "blocked" else None
         finished = reply.accepted and worker.wait_for(
             lambda s: (
                 (blocker is None or blocker.watch(s))
@@ -130,13 +130,17 @@ def _step_times(plan: Any) -> list[dict[str, Any]]:
     ]
 
 
-class _PathBlocker:
+class PathBlocker:
     """Drops a box across the path the robot is following, once, a little ahead of it (the blocked variant), where
     the goal stays reachable around it: a box in the only doorway would test nothing but giving up."""
 
-    def __init__(self, worker: Any, layout: Any) -> None:
+    def __init__(
+        self, worker: Any, layout: Any, keep_clear: tuple[tuple[float, float], ...] = (), clear_m: float = 0.0
+    ) -> None:
         self._worker = worker
         self._layout = layout
+        self._keep_clear = keep_clear  # points the box must not land near (a patrol's waypoints)
+        self._clear_m = clear_m
         self.dropped_at: list[float] | None = None
         self._next_search_s = 0.0
 
@@ -153,7 +157,7 @@ class _PathBlocker:
         lengths = np.linalg.norm(np.diff(path, axis=0), axis=1)
         arc = np.concatenate([[0.0], np.cumsum(lengths)])
         here = np.asarray(state.base_position[:2], dtype=float)
-        progress = _nearest_arc(path, arc, here)
+        progress = nearest_arc(path, arc, here)
         if progress < BLOCK_AFTER_M or arc[-1] - (progress + BLOCK_AHEAD_M) < BLOCK_MIN_LEFT_M:
             return True
         if state.sim_time_s < self._next_search_s:
@@ -161,13 +165,15 @@ class _PathBlocker:
         self._next_search_s = state.sim_time_s + BLOCK_SEARCH_PERIOD_S
         for ahead in np.arange(BLOCK_AHEAD_M, arc[-1] - progress - BLOCK_MIN_LEFT_M, 0.1):
             s = progress + float(ahead)
-            x, y = _point_at(path, arc, s)
-            tx, ty = np.subtract(_point_at(path, arc, s + 0.05), _point_at(path, arc, s - 0.05))
+            x, y = point_at(path, arc, s)
+            tx, ty = np.subtract(point_at(path, arc, s + 0.05), point_at(path, arc, s - 0.05))
             normal = np.array([-ty, tx]) / max(math.hypot(tx, ty), 1e-9)
             # on the path, else a little to one side: still across the robot's way (the path runs through the
             # box's grown footprint), but beside a gap the path could not have used before
             for offset in BLOCK_SIDE_OFFSETS_M:
                 box = (x + offset * normal[0], y + offset * normal[1])
+                if any(math.dist(box, point) < self._clear_m for point in self._keep_clear):
+                    continue
                 if self._leaves_a_way(state, box, tuple(path[-1])):
                     if self._worker.submit(PlaceObstacle(*box)).accepted:
                         self.dropped_at = [round(box[0], 3), round(box[1], 3)]
@@ -186,7 +192,7 @@ class _PathBlocker:
         return reachable(blocked, [goal], inflate) if reachable(here, [goal], inflate) else False
 
 
-def _nearest_arc(path: np.ndarray, arc: np.ndarray, point: np.ndarray) -> float:
+def nearest_arc(path: np.ndarray, arc: np.ndarray, point: np.ndarray) -> float:
     best, best_s = math.inf, 0.0
     for k in range(len(path) - 1):
         a, b = path[k], path[k + 1]
@@ -198,7 +204,7 @@ def _nearest_arc(path: np.ndarray, arc: np.ndarray, point: np.ndarray) -> float:
     return best_s
 
 
-def _point_at(path: np.ndarray, arc: np.ndarray, s: float) -> tuple[float, float]:
+def point_at(path: np.ndarray, arc: np.ndarray, s: float) -> tuple[float, float]:
     k = int(np.clip(np.searchsorted(arc, s, side="right") - 1, 0, len(path) - 2))
     t = (s - arc[k]) / max(arc[k + 1] - arc[k], 1e-9)
     p = path[k] + min(max(t, 0.0), 1.0) * (path[k + 1] - path[k])

@@ -98,6 +98,28 @@ class EventRow(Base):
     sim_time_s: Mapped[float] = mapped_column(Float)
 
 
+class BehaviourRunRow(Base):
+    """A behaviour run: what was started with which parameters, how it ended and why, and its feedback lines (its
+    state changes and snapshots are events)."""
+
+    __tablename__ = "behaviour_runs"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    session_id: Mapped[int] = mapped_column(ForeignKey("sessions.id", ondelete="CASCADE"), index=True)
+    robot_run_id: Mapped[int] = mapped_column(Integer)
+    robot_command_id: Mapped[int | None] = mapped_column(Integer)
+    name: Mapped[str] = mapped_column(String(64))
+    params: Mapped[dict[str, Any]] = mapped_column(JSON)
+    source: Mapped[str] = mapped_column(String(16))
+    started_at: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+    sim_start_s: Mapped[float] = mapped_column(Float)
+    state: Mapped[str] = mapped_column(String(16))  # running | succeeded | failed | stopped
+    finished_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
+    sim_end_s: Mapped[float | None] = mapped_column(Float)
+    reason: Mapped[str | None] = mapped_column(Text)
+    feedback: Mapped[list[str] | None] = mapped_column(JSON)
+
+
 class TranscriptRow(Base):
     """What was heard: the transcript, how sure the recogniser was, and the recording (a WAV under the audio
     directory, by a path relative to it)."""

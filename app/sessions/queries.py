@@ -12,6 +12,7 @@ from sqlalchemy import Select, and_, exists, func, or_, select
 from sqlalchemy.orm import Session
 
 from app.sessions.models import (
+    BehaviourRunRow,
     CameraFrameRow,
     CommandRow,
     EventRow,
@@ -171,6 +172,26 @@ def session_detail(db: Session, session_id: int) -> dict[str, Any] | None:
          "audio_url": f"/api/sessions/{session_id}/transcripts/{t.id}/audio.wav" if t.audio_path else None}
         for t in transcripts
     ]  # fmt: skip
+    runs = db.scalars(
+        select(BehaviourRunRow).where(BehaviourRunRow.session_id == session_id).order_by(BehaviourRunRow.id)
+    ).all()
+    behaviour_list = [
+        {
+            "run_id": r.robot_run_id,
+            "command_id": r.robot_command_id,
+            "name": r.name,
+            "params": r.params,
+            "source": r.source,
+            "state": r.state,
+            "reason": r.reason,
+            "feedback": r.feedback or [],
+            "started_at": _iso(r.started_at),
+            "finished_at": _iso(r.finished_at),
+            "sim_start_s": r.sim_start_s,
+            "sim_end_s": r.sim_end_s,
+        }
+        for r in runs
+    ]
     counts = {"commands": len(commands), "estops": sum(e.kind == ESTOP_KIND for e in events),
               "falls": sum(e.kind == FALL_KIND for e in events)}  # fmt: skip
     return {
@@ -179,20 +200,34 @@ def session_detail(db: Session, session_id: int) -> dict[str, Any] | None:
         "plans": plan_list,
         "events": event_list,
         "transcripts": transcript_list,
-        "timeline": build_timeline(command_list, transcript_list, plan_list, event_list),
+        "behaviours": behaviour_list,
+        "timeline": build_timeline(command_list, transcript_list, plan_list, event_list, session_id),
         "telemetry": telemetry_summary(db, row),
         "camera_frame_count": camera_frame_count(db, session_id),
     }
+
+
+# What of a behaviour run the timeline shows (its feedback lines are in the run's row, and in the events).
+BEHAVIOUR_TIMELINE_KINDS = (
+    "behaviour/started",
+    "behaviour/state",
+    "behaviour/paused",
+    "behaviour/resumed",
+    "behaviour/snapshot",
+    "behaviour/finished",
+)
 
 
 def camera_frame_count(db: Session, session_id: int) -> int:
     return db.scalar(select(func.count(CameraFrameRow.id)).where(CameraFrameRow.session_id == session_id)) or 0
 
 
-def build_timeline(commands: list[dict], transcripts: list[dict], plans: list[dict],
-                   events: list[dict]) -> list[dict[str, Any]]:  # fmt: skip
+def build_timeline(
+    commands: list[dict], transcripts: list[dict], plans: list[dict], events: list[dict], session_id: int | None = None
+) -> list[dict[str, Any]]:
     """What happened, in order: commands, what was heard, plans (each revision), step results with timings,
-    e-stops, falls, errors and alarms. Each item has a `sim_time_s` the replay can seek to."""
+    behaviours (started, their states, what they noticed with the camera's view, how they ended), e-stops, falls,
+    errors and alarms. Each item has a `sim_time_s` the replay can seek to."""
     items: list[dict[str, Any]] = []
     for c in commands:
         verdict = "accepted" if c["accepted"] else f"refused ({c['refusal']}): {'; '.join(c['errors'] or [])}"
@@ -219,6 +254,18 @@ def build_timeline(commands: list[dict], transcripts: list[dict], plans: list[di
                           else e["sim_time_s"], "level": ERROR if data["state"] == "failed" else 0,
                           "text": f"{data.get('action')}({args}) {data['state']}{took}{detail}",
                           "plan_id": data.get("plan_id")})  # fmt: skip
+        elif kind in BEHAVIOUR_TIMELINE_KINDS:
+            item = {
+                "type": "behaviour",
+                "at": e["wall_time"],
+                "sim_time_s": e["sim_time_s"],
+                "level": e["level"],
+                "text": e["message"],
+                "run_id": data.get("run_id"),
+            }
+            if kind == "behaviour/snapshot" and session_id is not None:
+                item["camera_url"] = f"/api/sessions/{session_id}/camera.jpg?t={e['sim_time_s']:.3f}"
+            items.append(item)
         elif kind.startswith("estop/"):
             items.append({"type": "estop", "at": e["wall_time"], "sim_time_s": e["sim_time_s"], "level": ERROR,
                           "text": e["message"]})  # fmt: skip

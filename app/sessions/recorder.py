@@ -32,6 +32,7 @@ from sqlalchemy.orm import sessionmaker
 
 from app.sessions.audio_store import keep_recording
 from app.sessions.models import (
+    BehaviourRunRow,
     CameraFrameRow,
     CommandRow,
     EventRow,
@@ -79,6 +80,16 @@ def _utc(ts: float | None = None) -> datetime:
 class _PlanFinished:
     robot_plan_id: int
     state: str
+    at: datetime
+
+
+@dataclass(frozen=True)
+class _BehaviourFinished:
+    robot_run_id: int
+    state: str
+    reason: str
+    feedback: list[str]
+    sim_end_s: float
     at: datetime
 
 
@@ -367,6 +378,33 @@ class SessionRecorder:
             )  # fmt: skip
         elif event.kind == "plan/finished":
             self._pending.put(_PlanFinished(data["plan_id"], data["state"], _utc(event.wall_time_s)))
+        elif event.kind == "behaviour/started":
+            self._pending.put(
+                BehaviourRunRow(
+                    session_id=sid,
+                    robot_run_id=data["run_id"],
+                    robot_command_id=data.get("command_id"),
+                    name=data["name"],
+                    params=data.get("params") or {},
+                    source=str(data.get("source", ""))[:16],
+                    started_at=_utc(event.wall_time_s),
+                    sim_start_s=event.sim_time_s,
+                    state="running",
+                )
+            )
+        elif event.kind == "behaviour/finished":
+            self._pending.put(
+                _BehaviourFinished(
+                    data["run_id"],
+                    data["state"],
+                    data.get("reason", ""),
+                    list(data.get("feedback", [])),
+                    event.sim_time_s,
+                    _utc(event.wall_time_s),
+                )
+            )
+        elif event.kind == "behaviour/snapshot":
+            self._sample_camera()  # the view the behaviour reported, kept even between the regular samples
 
     def _keep(self, spooled: str | None) -> str | None:
         if not spooled or self._audio_dir is None:
@@ -415,6 +453,22 @@ class SessionRecorder:
                                        PlanRow.robot_plan_id == item.robot_plan_id)
                                 .values(state=item.state, finished_at=item.at)
                             )  # fmt: skip
+                        elif isinstance(item, _BehaviourFinished):
+                            db.flush()
+                            db.execute(
+                                update(BehaviourRunRow)
+                                .where(
+                                    BehaviourRunRow.session_id == self.session_id,
+                                    BehaviourRunRow.robot_run_id == item.robot_run_id,
+                                )
+                                .values(
+                                    state=item.state,
+                                    reason=item.reason or None,
+                                    feedback=item.feedback,
+                                    sim_end_s=item.sim_end_s,
+                                    finished_at=item.at,
+                                )
+                            )
                         elif isinstance(item, _Heartbeat):
                             db.execute(
                                 update(SessionRow).where(SessionRow.id == self.session_id).values(heartbeat_at=item.at)

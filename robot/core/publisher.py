@@ -16,6 +16,7 @@ from robot.core.body import BodySnapshot
 from robot.core.measurements import Measurements
 from robot.core.safety import SafetyLatch
 from robot.interface import (
+    BehaviourStatus,
     ControlStats,
     Footprint,
     LocomotionState,
@@ -68,6 +69,7 @@ class MissionParts:
     locomotion: LocomotionController
     trunk: Callable[[], tuple[np.ndarray, np.ndarray]]  # the trunk's estimated position and rotation
     perception: Callable[[], PerceptionState | None]
+    behaviour: Callable[[], BehaviourStatus | None] | None = None  # the behaviour running, paused or last run
 
 
 class StatePublisher:
@@ -116,6 +118,7 @@ class StatePublisher:
             posture = self._posture_label()
             plan = mission.plans.shown() if mission is not None else None
             approval = mission is not None and mission.plans.approval_required
+            behaviour = mission.behaviour() if mission is not None and mission.behaviour is not None else None
         self.board.publish(
             RobotState(
                 sim_time_s=measured.sim_time_s,
@@ -139,6 +142,7 @@ class StatePublisher:
                 perception=mission.perception() if mission is not None else None,
                 proprioception=body.proprioception,
                 torque_enabled=body.torque_enabled,
+                behaviour=behaviour,
             )
         )
 

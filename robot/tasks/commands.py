@@ -171,7 +171,7 @@ class PlanCommands:
             if self._runner.last_command != (command_id, job.status.command_text) or self._runner.newer_queued():
                 return False  # a newer command has come in
             used = self._auto_replans.get(command_id, 0)
-            if used >= self.max_auto_replans or job.status.command_text == OPERATOR_PLAN:
+            if used >= self.max_auto_replans or job.status.command_text == OPERATOR_PLAN or _behaviour(job.plan):
                 return False
             self._auto_replans[command_id] = used + 1
         failure, done = failure_of(job)
@@ -189,3 +189,8 @@ class PlanCommands:
             job.status.command_text, result.plan, new_command=False, command_id=command_id, planned=result
         )
         return reply.accepted
+
+
+def _behaviour(plan: Plan) -> bool:
+    """A behaviour's plan (its one step runs the behaviour): not planned from text, so never replanned."""
+    return any(step.action == "behaviour" for step in plan.steps)

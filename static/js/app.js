@@ -252,6 +252,7 @@ function renderState(s) {
   $("st-held").textContent = s.held_object || "nothing";
   if (humanoid.renderLocomotion) humanoid.renderLocomotion(s.locomotion);
   if (humanoid.renderPerception) humanoid.renderPerception(s.perception, s.locomotion);
+  if (humanoid.renderBehaviour) humanoid.renderBehaviour(s.behaviour);
   renderPlan(s.plan);
 }
 

@@ -140,6 +140,15 @@ function renderTimeline(s) {
       audio.addEventListener("click", (e) => e.stopPropagation());
       li.appendChild(audio);
     }
+    if (item.camera_url) {  // what a behaviour noticed: the camera's view at that moment
+      const link = document.createElement("a");
+      link.href = item.camera_url;
+      link.target = "_blank";
+      link.textContent = "camera";
+      link.className = "tl-camera";
+      link.addEventListener("click", (e) => e.stopPropagation());
+      li.append(" ", link);
+    }
     li.title = "replay from here";
     li.addEventListener("click", () => seekReplay(item.sim_time_s));
     list.appendChild(li);

@@ -1,0 +1,1 @@
+"""An example behaviour package for the humanoid console (`wave_hello.behaviour.WaveHello`)."""
