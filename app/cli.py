@@ -108,8 +108,9 @@ def _access_control(settings: Settings):  # type: ignore[no-untyped-def]
     from app.auth.store import UserStore
     from app.sessions.db import make_engine, make_session_factory
 
-    return AccessControl(settings.auth, UserStore(make_session_factory(make_engine(settings.database_url))),
-                         settings.host)  # fmt: skip
+    return AccessControl(
+        settings.auth, UserStore(make_session_factory(make_engine(settings.database_url))), settings.host
+    )
 
 
 def _split_port(value: str | None) -> tuple[int | None, str | None]:
@@ -157,8 +158,10 @@ def _transcribe(args: argparse.Namespace, settings: Settings) -> int:
     if args.json:
         print(json.dumps(result, indent=2))
     else:
-        print(f"{result['text']!r} (confidence {result['confidence']:.2f}, {result['engine']}, "
-              f"{result['decode_ms']:.0f} ms for {result['audio_s']:.1f} s)")  # fmt: skip
+        print(
+            f"{result['text']!r} (confidence {result['confidence']:.2f}, {result['engine']}, "
+            f"{result['decode_ms']:.0f} ms for {result['audio_s']:.1f} s)"
+        )
     return 0 if result["text"] else 1
 
 
@@ -335,12 +338,19 @@ def build_parser() -> argparse.ArgumentParser:
 
     serve = sub.add_parser("serve", help="start the web app with the simulated robot (real time)")
     serve.add_argument("--host", default=None, help="interface to bind (default 127.0.0.1, or HOST)")
-    serve.add_argument("--port", default=None,
-                       help="HTTP port (default 8000, or PORT); with --backend dynamixel, a serial device such as "
-                       "/dev/ttyUSB0 is the U2D2's")  # fmt: skip
+    serve.add_argument(
+        "--port",
+        default=None,
+        help="HTTP port (default 8000, or PORT); with --backend dynamixel, a serial device such as "
+        "/dev/ttyUSB0 is the U2D2's",
+    )
     serve.add_argument("--http-port", type=int, default=None, help="HTTP port, when --port names the servo bus")
-    serve.add_argument("--backend", choices=["sim", "dynamixel"], default=None,
-                       help="sim (MuJoCo, the default) or dynamixel (the real robot's XM430s)")  # fmt: skip
+    serve.add_argument(
+        "--backend",
+        choices=["sim", "dynamixel"],
+        default=None,
+        help="sim (MuJoCo, the default) or dynamixel (the real robot's XM430s)",
+    )
     serve.add_argument("--robot-config", default=None, help="the real robot's configuration file (robot.toml)")
     serve.add_argument(
         "--imu",
@@ -403,8 +413,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     plan = sub.add_parser("plan", help="print the validated plan for a command, without moving the robot")
     plan.add_argument("text", help='e.g. "bring the red mug to the living-room table"')
-    plan.add_argument("--backend", choices=["rules", "openai", "local"], default=None,
-                      help="planner backend (default: HUMANOID_PLANNER_BACKEND, else rules)")  # fmt: skip
+    plan.add_argument(
+        "--backend",
+        choices=["rules", "openai", "local"],
+        default=None,
+        help="planner backend (default: HUMANOID_PLANNER_BACKEND, else rules)",
+    )
     plan.add_argument("--seed", type=int, default=0, help="world seed (which places and objects exist)")
     plan.add_argument("--holding", default=None, help="plan as if the robot held this object")
     plan.add_argument(
@@ -471,8 +485,12 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--json", action="store_true", help="print the JSON result")
     bench.add_argument("--output", default=None, help="also write the JSON result to this file")
     bench.add_argument("--presses", type=int, default=100, help="e-stop presses to time")
-    bench.add_argument("--viewers", type=int, default=None,
-                       help="core: browser pages with the 3D view open (2); load: viewers connected (20)")  # fmt: skip
+    bench.add_argument(
+        "--viewers",
+        type=int,
+        default=None,
+        help="core: browser pages with the 3D view open (2); load: viewers connected (20)",
+    )
     bench.add_argument(
         "--duration",
         type=float,
@@ -486,8 +504,12 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--script-duration", type=float, default=60.0, help="walk: seconds per script")
     bench.add_argument("--seed", type=int, default=0, help="walk, perception: first seed; network: the link's losses")
     bench.add_argument("--cuts", type=int, default=6, help="network: link cuts while driving")
-    bench.add_argument("--realtime-duration", type=float, default=30.0,
-                       help="walk, perception: seconds of real-time walking for the tick and rate figures")  # fmt: skip
+    bench.add_argument(
+        "--realtime-duration",
+        type=float,
+        default=30.0,
+        help="walk, perception: seconds of real-time walking for the tick and rate figures",
+    )
     bench.add_argument(
         "--seeds",
         type=int,

@@ -103,11 +103,16 @@ def create_app(settings: Settings | None = None, runtime: Runtime | None = None)
         description="Commands, plans, e-stop, state and sessions of a simulated (or real) Robotis OP3.",
         lifespan=lifespan,
     )
-    app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes,
-                       larger={"/api/speech/transcribe": speech.MAX_AUDIO_BYTES,
-                               sessions.IMPORT_PATH: settings.max_import_bytes})  # fmt: skip
-    app.add_middleware(AccessMiddleware, access=lambda: getattr(getattr(app.state, "runtime", None), "access", None),
-                       allowed_origins=settings.allowed_origins)  # fmt: skip
+    app.add_middleware(
+        BodySizeLimit,
+        max_bytes=settings.max_body_bytes,
+        larger={"/api/speech/transcribe": speech.MAX_AUDIO_BYTES, sessions.IMPORT_PATH: settings.max_import_bytes},
+    )
+    app.add_middleware(
+        AccessMiddleware,
+        access=lambda: getattr(getattr(app.state, "runtime", None), "access", None),
+        allowed_origins=settings.allowed_origins,
+    )
     app.add_exception_handler(RequestValidationError, _validation_error)
     app.include_router(auth.router)
     app.include_router(robot.router)

@@ -47,13 +47,15 @@ def login(body: LoginIn, request: Request, response: Response, rt: RuntimeDep) -
     try:
         result = rt.access.login(body.name, body.password, client)
     except LoginThrottled as exc:
-        raise HTTPException(429, detail={"message": str(exc)},
-                            headers={"Retry-After": str(int(exc.retry_after_s) + 1)}) from exc  # fmt: skip
+        raise HTTPException(
+            429, detail={"message": str(exc)}, headers={"Retry-After": str(int(exc.retry_after_s) + 1)}
+        ) from exc
     if result is None:
         raise HTTPException(401, detail={"message": "wrong name or password"})
     who, cookie = result
-    response.set_cookie(COOKIE_NAME, cookie, max_age=LOGIN_TTL_S, httponly=True, samesite="strict",
-                        secure=request.url.scheme == "https")  # fmt: skip
+    response.set_cookie(
+        COOKIE_NAME, cookie, max_age=LOGIN_TTL_S, httponly=True, samesite="strict", secure=request.url.scheme == "https"
+    )
     return {"name": who.name, "role": who.role.value, "auth": True}
 
 

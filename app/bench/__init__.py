@@ -20,13 +20,22 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
     elif suite == "walk":
         from app.bench.walk import run_walk
 
-        result = run_walk(scripts=args.scripts, duration_s=args.script_duration, seed=args.seed or 0,
-                          realtime_s=args.realtime_duration)  # fmt: skip
+        result = run_walk(
+            scripts=args.scripts,
+            duration_s=args.script_duration,
+            seed=args.seed or 0,
+            realtime_s=args.realtime_duration,
+        )
     elif suite == "perception":
         from app.bench.perception import run_perception
 
-        result = run_perception(seeds=args.seeds or 50, views=args.views, seed=args.seed or 0,
-                                realtime_s=args.realtime_duration, tours=args.tours)  # fmt: skip
+        result = run_perception(
+            seeds=args.seeds or 50,
+            views=args.views,
+            seed=args.seed or 0,
+            realtime_s=args.realtime_duration,
+            tours=args.tours,
+        )
     elif suite == "capstone":
         from app.bench.capstone import TASKS, run_capstone
 

@@ -71,8 +71,9 @@ def run_task(task: str, seed: int, timeout_s: float = 600.0) -> dict[str, Any]:
             ),
             timeout_s,
         )
-        replans = max((e.data.get("replans", 0) for e in worker.recent_events() if e.kind == "navigation/arrived"),
-                      default=0)  # fmt: skip
+        replans = max(
+            (e.data.get("replans", 0) for e in worker.recent_events() if e.kind == "navigation/arrived"), default=0
+        )
         state = worker.state()
         mug = backend.data.body(object_body_name("red mug"))
         mug_position = np.array(mug.xpos, dtype=float)
@@ -85,12 +86,18 @@ def run_task(task: str, seed: int, timeout_s: float = 600.0) -> dict[str, Any]:
     places = {p.name: p for p in layout.places}
     if task in ("pick", "blocked"):
         counter = places["kitchen counter"].surface
-        truth_ok = bool(state.held_object == "red mug" and float(np.linalg.norm(mug_position[:2] - hand[:2])) < 0.04
-                        and mug_position[2] > counter.height + 0.03)  # fmt: skip
+        truth_ok = bool(
+            state.held_object == "red mug"
+            and float(np.linalg.norm(mug_position[:2] - hand[:2])) < 0.04
+            and mug_position[2] > counter.height + 0.03
+        )
     else:
         table = places["living-room table"].surface
-        truth_ok = bool(table.contains(float(mug_position[0]), float(mug_position[1]))
-                        and abs(mug_position[2] - table.height) < 0.01 and mug_tilt < UPRIGHT_DEG)  # fmt: skip
+        truth_ok = bool(
+            table.contains(float(mug_position[0]), float(mug_position[1]))
+            and abs(mug_position[2] - table.height) < 0.01
+            and mug_tilt < UPRIGHT_DEG
+        )
     failed_step = next((s for s in state.plan.steps if s.state not in ("succeeded",)), None) if state.plan else None
     untested = blocker is not None and blocker.dropped_at is None  # no box was dropped: not a blocked-path run
     return {
@@ -211,8 +218,9 @@ def point_at(path: np.ndarray, arc: np.ndarray, s: float) -> tuple[float, float]
     return float(p[0]), float(p[1])
 
 
-def run_capstone(seeds: int = 30, seed: int = 0, tasks: tuple[str, ...] = ("pick", "bring", "blocked"),
-                 jobs: int = 1) -> dict[str, Any]:  # fmt: skip
+def run_capstone(
+    seeds: int = 30, seed: int = 0, tasks: tuple[str, ...] = ("pick", "bring", "blocked"), jobs: int = 1
+) -> dict[str, Any]:
     jobs = max(1, min(jobs, os.cpu_count() or 1))
     runs: list[dict[str, Any]] = []
     all_seeds = list(range(seed, seed + seeds))

@@ -56,14 +56,16 @@ class SessionFilter:
         if self.outcome == "running":
             conditions.append(SessionRow.ended_at.is_(None))
         elif self.outcome == "ended":
-            conditions.append(and_(SessionRow.ended_at.is_not(None),
-                                   or_(SessionRow.outcome.is_(None), SessionRow.outcome == "ended")))  # fmt: skip
+            conditions.append(
+                and_(SessionRow.ended_at.is_not(None), or_(SessionRow.outcome.is_(None), SessionRow.outcome == "ended"))
+            )
         elif self.outcome:
             conditions.append(SessionRow.outcome == self.outcome)
         if self.text:
             pattern = f"%{self.text.lower()}%"
-            conditions.append(exists().where(CommandRow.session_id == SessionRow.id,
-                                             func.lower(CommandRow.text).like(pattern)))  # fmt: skip
+            conditions.append(
+                exists().where(CommandRow.session_id == SessionRow.id, func.lower(CommandRow.text).like(pattern))
+            )
         for flag, kind in ((self.had_estop, ESTOP_KIND), (self.had_fall, FALL_KIND)):
             if flag is not None:
                 has = exists().where(EventRow.session_id == SessionRow.id, EventRow.kind == kind)
@@ -96,8 +98,9 @@ def session_summary(row: SessionRow, counts: dict[str, int] | None = None) -> di
     }
 
 
-def list_sessions(db: Session, filters: SessionFilter | None = None, limit: int = 50,
-                  offset: int = 0) -> tuple[list[dict[str, Any]], int]:  # fmt: skip
+def list_sessions(
+    db: Session, filters: SessionFilter | None = None, limit: int = 50, offset: int = 0
+) -> tuple[list[dict[str, Any]], int]:
     filters = filters or SessionFilter()
     total = db.scalar(filters.apply(select(func.count(SessionRow.id)))) or 0
     rows = db.scalars(
@@ -105,8 +108,11 @@ def list_sessions(db: Session, filters: SessionFilter | None = None, limit: int 
     ).all()
     ids = [r.id for r in rows]
     counts: dict[int, dict[str, Any]] = {i: {} for i in ids}
-    for sid, n in db.execute(select(CommandRow.session_id, func.count(CommandRow.id))
-                             .where(CommandRow.session_id.in_(ids)).group_by(CommandRow.session_id)):  # fmt: skip
+    for sid, n in db.execute(
+        select(CommandRow.session_id, func.count(CommandRow.id))
+        .where(CommandRow.session_id.in_(ids))
+        .group_by(CommandRow.session_id)
+    ):
         counts[sid]["commands"] = n
     for sid, kind, n in db.execute(
         select(EventRow.session_id, EventRow.kind, func.count(EventRow.id))
@@ -141,37 +147,77 @@ def session_detail(db: Session, session_id: int) -> dict[str, Any] | None:
     steps_by_plan: dict[int, list[dict[str, Any]]] = {}
     for s in steps:
         steps_by_plan.setdefault(s.robot_plan_id, []).append(
-            {"index": s.step_index, "action": s.action, "args": s.args, "state": s.state, "detail": s.detail,
-             "sim_start_s": s.sim_start_s, "sim_end_s": s.sim_end_s,
-             "duration_s": (s.sim_end_s - s.sim_start_s) if s.sim_start_s is not None and s.sim_end_s is not None
-             else None}
-        )  # fmt: skip
+            {
+                "index": s.step_index,
+                "action": s.action,
+                "args": s.args,
+                "state": s.state,
+                "detail": s.detail,
+                "sim_start_s": s.sim_start_s,
+                "sim_end_s": s.sim_end_s,
+                "duration_s": (s.sim_end_s - s.sim_start_s)
+                if s.sim_start_s is not None and s.sim_end_s is not None
+                else None,
+            }
+        )
     clock = SimClock.of(events, telemetry_bounds(db, session_id))
     command_list = [
-        {"id": c.id, "robot_command_id": c.robot_command_id, "received_at": _iso(c.received_at),
-         "sim_time_s": clock.sim_at(c.received_at), "source": c.source, "text": c.text, "accepted": c.accepted,
-         "refusal": c.refusal, "errors": c.errors}
+        {
+            "id": c.id,
+            "robot_command_id": c.robot_command_id,
+            "received_at": _iso(c.received_at),
+            "sim_time_s": clock.sim_at(c.received_at),
+            "source": c.source,
+            "text": c.text,
+            "accepted": c.accepted,
+            "refusal": c.refusal,
+            "errors": c.errors,
+        }
         for c in commands
-    ]  # fmt: skip
+    ]
     plan_list = [
-        {"plan_id": p.robot_plan_id, "command_id": p.robot_command_id, "revision": p.revision, "text": p.text,
-         "plan": p.plan, "state": p.state, "created_at": _iso(p.created_at), "finished_at": _iso(p.finished_at),
-         "sim_time_s": clock.sim_at(p.created_at),
-         "steps": sorted(steps_by_plan.get(p.robot_plan_id, []), key=lambda s: s["index"])}
+        {
+            "plan_id": p.robot_plan_id,
+            "command_id": p.robot_command_id,
+            "revision": p.revision,
+            "text": p.text,
+            "plan": p.plan,
+            "state": p.state,
+            "created_at": _iso(p.created_at),
+            "finished_at": _iso(p.finished_at),
+            "sim_time_s": clock.sim_at(p.created_at),
+            "steps": sorted(steps_by_plan.get(p.robot_plan_id, []), key=lambda s: s["index"]),
+        }
         for p in plans
-    ]  # fmt: skip
+    ]
     event_list = [
-        {"seq": e.seq, "kind": e.kind, "level": e.level, "message": e.message, "data": e.data,
-         "wall_time": _iso(e.wall_time), "sim_time_s": e.sim_time_s}
+        {
+            "seq": e.seq,
+            "kind": e.kind,
+            "level": e.level,
+            "message": e.message,
+            "data": e.data,
+            "wall_time": _iso(e.wall_time),
+            "sim_time_s": e.sim_time_s,
+        }
         for e in events
-    ]  # fmt: skip
+    ]
     transcript_list = [
-        {"id": t.id, "received_at": _iso(t.received_at), "sim_time_s": clock.sim_at(t.received_at), "source": t.source,
-         "text": t.text, "confidence": t.confidence, "engine": t.engine, "in_grammar": t.in_grammar,
-         "audio_s": t.audio_s, "decode_ms": t.decode_ms,
-         "audio_url": f"/api/sessions/{session_id}/transcripts/{t.id}/audio.wav" if t.audio_path else None}
+        {
+            "id": t.id,
+            "received_at": _iso(t.received_at),
+            "sim_time_s": clock.sim_at(t.received_at),
+            "source": t.source,
+            "text": t.text,
+            "confidence": t.confidence,
+            "engine": t.engine,
+            "in_grammar": t.in_grammar,
+            "audio_s": t.audio_s,
+            "decode_ms": t.decode_ms,
+            "audio_url": f"/api/sessions/{session_id}/transcripts/{t.id}/audio.wav" if t.audio_path else None,
+        }
         for t in transcripts
-    ]  # fmt: skip
+    ]
     runs = db.scalars(
         select(BehaviourRunRow).where(BehaviourRunRow.session_id == session_id).order_by(BehaviourRunRow.id)
     ).all()
@@ -192,8 +238,11 @@ def session_detail(db: Session, session_id: int) -> dict[str, Any] | None:
         }
         for r in runs
     ]
-    counts = {"commands": len(commands), "estops": sum(e.kind == ESTOP_KIND for e in events),
-              "falls": sum(e.kind == FALL_KIND for e in events)}  # fmt: skip
+    counts = {
+        "commands": len(commands),
+        "estops": sum(e.kind == ESTOP_KIND for e in events),
+        "falls": sum(e.kind == FALL_KIND for e in events),
+    }
     return {
         **session_summary(row, counts),
         "commands": command_list,
@@ -231,17 +280,39 @@ def build_timeline(
     items: list[dict[str, Any]] = []
     for c in commands:
         verdict = "accepted" if c["accepted"] else f"refused ({c['refusal']}): {'; '.join(c['errors'] or [])}"
-        items.append({"type": "command", "at": c["received_at"], "sim_time_s": c["sim_time_s"], "level": 0,
-                      "text": f'"{c["text"]}" from {c["source"]}: {verdict}'})  # fmt: skip
+        items.append(
+            {
+                "type": "command",
+                "at": c["received_at"],
+                "sim_time_s": c["sim_time_s"],
+                "level": 0,
+                "text": f'"{c["text"]}" from {c["source"]}: {verdict}',
+            }
+        )
     for t in transcripts:
-        items.append({"type": "heard", "at": t["received_at"], "sim_time_s": t["sim_time_s"], "level": 0,
-                      "text": f'heard "{t["text"]}" (confidence {t["confidence"]:.2f}, {t["source"]})',
-                      "audio_url": t["audio_url"]})  # fmt: skip
+        items.append(
+            {
+                "type": "heard",
+                "at": t["received_at"],
+                "sim_time_s": t["sim_time_s"],
+                "level": 0,
+                "text": f'heard "{t["text"]}" (confidence {t["confidence"]:.2f}, {t["source"]})',
+                "audio_url": t["audio_url"],
+            }
+        )
     for p in plans:
         actions = ", ".join(s["action"] for s in p["plan"].get("steps", [])) if isinstance(p["plan"], dict) else ""
         text = f'plan {p["plan_id"]} revision {p["revision"]} for "{p["text"]}": {actions} -> {p["state"]}'
-        items.append({"type": "plan", "at": p["created_at"], "sim_time_s": p["sim_time_s"], "level": 0, "text": text,
-                      "plan_id": p["plan_id"]})  # fmt: skip
+        items.append(
+            {
+                "type": "plan",
+                "at": p["created_at"],
+                "sim_time_s": p["sim_time_s"],
+                "level": 0,
+                "text": text,
+                "plan_id": p["plan_id"],
+            }
+        )
     for e in events:
         kind = e["kind"]
         data = e["data"] or {}
@@ -250,10 +321,16 @@ def build_timeline(
             took = f" in {end - start:.1f} s" if start is not None and end is not None else ""
             args = ", ".join(str(v) for v in (data.get("args") or {}).values())
             detail = f": {data['detail']}" if data.get("detail") else ""
-            items.append({"type": "step", "at": e["wall_time"], "sim_time_s": start if start is not None
-                          else e["sim_time_s"], "level": ERROR if data["state"] == "failed" else 0,
-                          "text": f"{data.get('action')}({args}) {data['state']}{took}{detail}",
-                          "plan_id": data.get("plan_id")})  # fmt: skip
+            items.append(
+                {
+                    "type": "step",
+                    "at": e["wall_time"],
+                    "sim_time_s": start if start is not None else e["sim_time_s"],
+                    "level": ERROR if data["state"] == "failed" else 0,
+                    "text": f"{data.get('action')}({args}) {data['state']}{took}{detail}",
+                    "plan_id": data.get("plan_id"),
+                }
+            )
         elif kind in BEHAVIOUR_TIMELINE_KINDS:
             item = {
                 "type": "behaviour",
@@ -267,19 +344,44 @@ def build_timeline(
                 item["camera_url"] = f"/api/sessions/{session_id}/camera.jpg?t={e['sim_time_s']:.3f}"
             items.append(item)
         elif kind.startswith("estop/"):
-            items.append({"type": "estop", "at": e["wall_time"], "sim_time_s": e["sim_time_s"], "level": ERROR,
-                          "text": e["message"]})  # fmt: skip
+            items.append(
+                {
+                    "type": "estop",
+                    "at": e["wall_time"],
+                    "sim_time_s": e["sim_time_s"],
+                    "level": ERROR,
+                    "text": e["message"],
+                }
+            )
         elif kind == FALL_KIND:
-            items.append({"type": "fall", "at": e["wall_time"], "sim_time_s": e["sim_time_s"], "level": ERROR,
-                          "text": e["message"]})  # fmt: skip
+            items.append(
+                {
+                    "type": "fall",
+                    "at": e["wall_time"],
+                    "sim_time_s": e["sim_time_s"],
+                    "level": ERROR,
+                    "text": e["message"],
+                }
+            )
         elif e["level"] >= WARN and not kind.startswith("plan/"):
             alarm = kind.startswith("diagnostics/") or e["level"] < ERROR
-            items.append({"type": "alarm" if alarm else "error", "at": e["wall_time"],
-                          "sim_time_s": e["sim_time_s"], "level": e["level"],
-                          "text": f"[{kind}] {e['message']}"})  # fmt: skip
+            items.append(
+                {
+                    "type": "alarm" if alarm else "error",
+                    "at": e["wall_time"],
+                    "sim_time_s": e["sim_time_s"],
+                    "level": e["level"],
+                    "text": f"[{kind}] {e['message']}",
+                }
+            )
     order = {"heard": 0, "command": 1, "plan": 2, "step": 3}
-    items.sort(key=lambda i: (round(i["sim_time_s"], 2) if i["sim_time_s"] is not None else math.inf,
-                              order.get(i["type"], 4), i["at"] or ""))  # fmt: skip
+    items.sort(
+        key=lambda i: (
+            round(i["sim_time_s"], 2) if i["sim_time_s"] is not None else math.inf,
+            order.get(i["type"], 4),
+            i["at"] or "",
+        )
+    )
     return items
 
 
@@ -306,8 +408,9 @@ class SimClock:
 
 def telemetry_bounds(db: Session, session_id: int) -> list[tuple[datetime, float]]:
     chunk = TelemetryChunkRow
-    rows = db.execute(select(chunk.wall_t0, chunk.sim_t0, chunk.wall_t1, chunk.sim_t1)
-                      .where(chunk.session_id == session_id)).all()  # fmt: skip
+    rows = db.execute(
+        select(chunk.wall_t0, chunk.sim_t0, chunk.wall_t1, chunk.sim_t1).where(chunk.session_id == session_id)
+    ).all()
     return [(w0, s0) for w0, s0, _, _ in rows] + [(w1, s1) for _, _, w1, s1 in rows]
 
 
@@ -329,8 +432,9 @@ def telemetry_summary(db: Session, row: SessionRow) -> dict[str, Any]:
     }
 
 
-def load_telemetry(db: Session, session_id: int, sim_from: float | None = None,
-                   sim_to: float | None = None) -> tuple[TelemetryLayout | None, np.ndarray]:  # fmt: skip
+def load_telemetry(
+    db: Session, session_id: int, sim_from: float | None = None, sim_to: float | None = None
+) -> tuple[TelemetryLayout | None, np.ndarray]:
     """The session's telemetry rows (n, width) in time order, optionally within [sim_from, sim_to]."""
     row = db.get(SessionRow, session_id)
     if row is None or not row.telemetry_layout:
@@ -353,8 +457,14 @@ def load_telemetry(db: Session, session_id: int, sim_from: float | None = None,
     return layout, rows[keep]
 
 
-def telemetry_series(db: Session, session_id: int, fields: list[str], max_points: int = 2000,
-                     sim_from: float | None = None, sim_to: float | None = None) -> dict[str, Any] | None:  # fmt: skip
+def telemetry_series(
+    db: Session,
+    session_id: int,
+    fields: list[str],
+    max_points: int = 2000,
+    sim_from: float | None = None,
+    sim_to: float | None = None,
+) -> dict[str, Any] | None:
     """Named signals for plotting, thinned to at most `max_points` samples (every k-th)."""
     layout, rows = load_telemetry(db, session_id, sim_from, sim_to)
     if layout is None:
@@ -377,10 +487,17 @@ def _finite_list(values: np.ndarray) -> list[float | None]:
 
 def camera_frame_at(db: Session, session_id: int, sim_time_s: float) -> CameraFrameRow | None:
     """The last frame taken at or before `sim_time_s` (the first one before the first)."""
-    before = db.scalars(select(CameraFrameRow).where(CameraFrameRow.session_id == session_id,
-                                                     CameraFrameRow.sim_time_s <= sim_time_s)
-                        .order_by(CameraFrameRow.sim_time_s.desc()).limit(1)).first()  # fmt: skip
+    before = db.scalars(
+        select(CameraFrameRow)
+        .where(CameraFrameRow.session_id == session_id, CameraFrameRow.sim_time_s <= sim_time_s)
+        .order_by(CameraFrameRow.sim_time_s.desc())
+        .limit(1)
+    ).first()
     if before is not None:
         return before
-    return db.scalars(select(CameraFrameRow).where(CameraFrameRow.session_id == session_id)
-                      .order_by(CameraFrameRow.sim_time_s).limit(1)).first()  # fmt: skip
+    return db.scalars(
+        select(CameraFrameRow)
+        .where(CameraFrameRow.session_id == session_id)
+        .order_by(CameraFrameRow.sim_time_s)
+        .limit(1)
+    ).first()

@@ -149,11 +149,19 @@ class SessionRecorder:
         self.stats = WriteStats()
         description = port.describe()
         with self._factory() as db:
-            row = SessionRow(kind=kind, started_at=_utc(), seed=seed, backend=backend,
-                             robot_model=description.model_name, scene_mjcf=description.mjcf_xml or None,
-                             telemetry_layout=description.telemetry_layout or None,
-                             telemetry_hz=description.telemetry_hz or None, heartbeat_at=_utc(),
-                             recorder_host=socket.gethostname(), recorder_pid=os.getpid())  # fmt: skip
+            row = SessionRow(
+                kind=kind,
+                started_at=_utc(),
+                seed=seed,
+                backend=backend,
+                robot_model=description.model_name,
+                scene_mjcf=description.mjcf_xml or None,
+                telemetry_layout=description.telemetry_layout or None,
+                telemetry_hz=description.telemetry_hz or None,
+                heartbeat_at=_utc(),
+                recorder_host=socket.gethostname(),
+                recorder_pid=os.getpid(),
+            )
             db.add(row)
             db.commit()
             self.session_id: int = row.id
@@ -173,10 +181,16 @@ class SessionRecorder:
     def record_command(self, text: str, source: str, reply: CommandReply, received_at: float | None = None) -> None:
         """Every command, accepted or refused, with the reasons it was refused: on disk before this returns (or,
         when the database cannot take it now, queued for the next write). `received_at`: when it came (epoch s)."""
-        row = CommandRow(session_id=self.session_id, robot_command_id=reply.command_id, received_at=_utc(received_at),
-                         source=source, text=text, accepted=reply.accepted,
-                         refusal=reply.refusal.value if reply.refusal else None,
-                         errors=list(reply.errors) or None)  # fmt: skip
+        row = CommandRow(
+            session_id=self.session_id,
+            robot_command_id=reply.command_id,
+            received_at=_utc(received_at),
+            source=source,
+            text=text,
+            accepted=reply.accepted,
+            refusal=reply.refusal.value if reply.refusal else None,
+            errors=list(reply.errors) or None,
+        )
         self._pending.put(row)
         self._write_through()
 
@@ -191,11 +205,21 @@ class SessionRecorder:
         if self.stats.failing_since_wall_s is None:
             self._flush()
 
-    def _transcript_row(self, heard: dict[str, Any], source: str, audio_path: str | None,
-                        at: datetime) -> TranscriptRow:  # fmt: skip
-        return TranscriptRow(session_id=self.session_id, received_at=at, source=source, text=heard["text"],
-                             confidence=heard["confidence"], engine=heard["engine"], in_grammar=heard["in_grammar"],
-                             audio_s=heard["audio_s"], decode_ms=heard["decode_ms"], audio_path=audio_path)  # fmt: skip
+    def _transcript_row(
+        self, heard: dict[str, Any], source: str, audio_path: str | None, at: datetime
+    ) -> TranscriptRow:
+        return TranscriptRow(
+            session_id=self.session_id,
+            received_at=at,
+            source=source,
+            text=heard["text"],
+            confidence=heard["confidence"],
+            engine=heard["engine"],
+            in_grammar=heard["in_grammar"],
+            audio_s=heard["audio_s"],
+            decode_ms=heard["decode_ms"],
+            audio_path=audio_path,
+        )
 
     def close(self, outcome: str | None = None, summary: dict[str, Any] | None = None) -> None:
         """Flush everything, then mark the session ended (once: a session closed as crashed stays so)."""
@@ -283,10 +307,17 @@ class SessionRecorder:
         for start in range(0, len(rows), MAX_CHUNK_ROWS):
             part = rows[start : start + MAX_CHUNK_ROWS]
             self._pending.put(
-                TelemetryChunkRow(session_id=self.session_id, first_seq=first + start, count=len(part),
-                                  sim_t0=float(part[0, 0]), sim_t1=float(part[-1, 0]), wall_t0=_utc(part[0, 1]),
-                                  wall_t1=_utc(part[-1, 1]), data=encode_rows(part))
-            )  # fmt: skip
+                TelemetryChunkRow(
+                    session_id=self.session_id,
+                    first_seq=first + start,
+                    count=len(part),
+                    sim_t0=float(part[0, 0]),
+                    sim_t1=float(part[-1, 0]),
+                    wall_t0=_utc(part[0, 1]),
+                    wall_t1=_utc(part[-1, 1]),
+                    data=encode_rows(part),
+                )
+            )
 
     def _sample_camera(self) -> None:
         image = self._port.sensor_feed().camera
@@ -294,13 +325,28 @@ class SessionRecorder:
             return
         self._last_camera_seq = image.seq
         jpeg, width, height, scale = shrink_jpeg(image.jpeg, image.width, image.height, self._camera_width)
-        detections = [{"label": d.label, "confidence": d.confidence, "position": list(d.position),
-                       "box": [round(v * scale) for v in d.box], "distance_m": d.distance_m}
-                      for d in image.detections]  # fmt: skip
+        detections = [
+            {
+                "label": d.label,
+                "confidence": d.confidence,
+                "position": list(d.position),
+                "box": [round(v * scale) for v in d.box],
+                "distance_m": d.distance_m,
+            }
+            for d in image.detections
+        ]
         self._pending.put(
-            CameraFrameRow(session_id=self.session_id, seq=image.seq, sim_time_s=image.sim_time_s, wall_time=_utc(),
-                           width=width, height=height, jpeg=jpeg, detections=detections)
-        )  # fmt: skip
+            CameraFrameRow(
+                session_id=self.session_id,
+                seq=image.seq,
+                sim_time_s=image.sim_time_s,
+                wall_time=_utc(),
+                width=width,
+                height=height,
+                jpeg=jpeg,
+                detections=detections,
+            )
+        )
 
     def _sample_scan(self) -> None:
         scan = self._port.sensor_feed().scan
@@ -351,31 +397,62 @@ class SessionRecorder:
         data = dict(event.data)
         if event.kind == "speech/heard":  # the robot's microphone: the transcript and its recording
             data["audio_path"] = self._keep(data.get("audio_path"))
-            self._pending.put(self._transcript_row(data, data.get("source", "robot-mic"), data["audio_path"],
-                                                   _utc(event.wall_time_s)))  # fmt: skip
+            self._pending.put(
+                self._transcript_row(data, data.get("source", "robot-mic"), data["audio_path"], _utc(event.wall_time_s))
+            )
         elif event.kind == "speech/command":  # ... and the command it ran on hearing it
             self._pending.put(
-                CommandRow(session_id=sid, robot_command_id=data.get("command_id"), received_at=_utc(event.wall_time_s),
-                           source=data.get("source", "robot-mic"), text=data["text"], accepted=data["accepted"],
-                           refusal=data.get("refusal"), errors=data.get("errors") or None)
-            )  # fmt: skip
+                CommandRow(
+                    session_id=sid,
+                    robot_command_id=data.get("command_id"),
+                    received_at=_utc(event.wall_time_s),
+                    source=data.get("source", "robot-mic"),
+                    text=data["text"],
+                    accepted=data["accepted"],
+                    refusal=data.get("refusal"),
+                    errors=data.get("errors") or None,
+                )
+            )
         self._pending.put(
-            EventRow(session_id=sid, seq=event.seq, kind=event.kind, level=int(event.level), message=event.message,
-                     data=data or None, wall_time=_utc(event.wall_time_s), sim_time_s=event.sim_time_s)
-        )  # fmt: skip
+            EventRow(
+                session_id=sid,
+                seq=event.seq,
+                kind=event.kind,
+                level=int(event.level),
+                message=event.message,
+                data=data or None,
+                wall_time=_utc(event.wall_time_s),
+                sim_time_s=event.sim_time_s,
+            )
+        )
         if event.kind == "plan/created":
             self._pending.put(
-                PlanRow(session_id=sid, robot_plan_id=data["plan_id"], robot_command_id=data["command_id"],
-                        revision=data["revision"], text=data["text"], plan=data["plan"],
-                        created_at=_utc(event.wall_time_s), state="running")
-            )  # fmt: skip
+                PlanRow(
+                    session_id=sid,
+                    robot_plan_id=data["plan_id"],
+                    robot_command_id=data["command_id"],
+                    revision=data["revision"],
+                    text=data["text"],
+                    plan=data["plan"],
+                    created_at=_utc(event.wall_time_s),
+                    state="running",
+                )
+            )
         elif event.kind == "plan/step" and data.get("state") in TERMINAL_STEP_STATES:
             self._pending.put(
-                StepResultRow(session_id=sid, robot_plan_id=data["plan_id"], step_index=data["index"],
-                              action=data["action"], args=data["args"], state=data["state"], detail=data["detail"],
-                              sim_start_s=data.get("sim_start_s"), sim_end_s=data.get("sim_end_s"),
-                              recorded_at=_utc(event.wall_time_s))
-            )  # fmt: skip
+                StepResultRow(
+                    session_id=sid,
+                    robot_plan_id=data["plan_id"],
+                    step_index=data["index"],
+                    action=data["action"],
+                    args=data["args"],
+                    state=data["state"],
+                    detail=data["detail"],
+                    sim_start_s=data.get("sim_start_s"),
+                    sim_end_s=data.get("sim_end_s"),
+                    recorded_at=_utc(event.wall_time_s),
+                )
+            )
         elif event.kind == "plan/finished":
             self._pending.put(_PlanFinished(data["plan_id"], data["state"], _utc(event.wall_time_s)))
         elif event.kind == "behaviour/started":
@@ -449,10 +526,11 @@ class SessionRecorder:
                             db.flush()
                             db.execute(
                                 update(PlanRow)
-                                .where(PlanRow.session_id == self.session_id,
-                                       PlanRow.robot_plan_id == item.robot_plan_id)
+                                .where(
+                                    PlanRow.session_id == self.session_id, PlanRow.robot_plan_id == item.robot_plan_id
+                                )
                                 .values(state=item.state, finished_at=item.at)
-                            )  # fmt: skip
+                            )
                         elif isinstance(item, _BehaviourFinished):
                             db.flush()
                             db.execute(

@@ -11,8 +11,13 @@ from robot.behaviours.api import Behaviour, BehaviourFailed, Param
 from robot.behaviours.robot_view import BehaviourRobot
 
 GESTURE_WORDS = {"wave": "wave", "nod": "nod", "shake": "shake_head", "shake your head": "shake_head"}
-ABILITIES = ("walk to any place I know", "look for objects and pick them up", "carry things from place to place",
-             "patrol, give tours and fetch things", "wave, nod, shake my head and point")  # fmt: skip
+ABILITIES = (
+    "walk to any place I know",
+    "look for objects and pick them up",
+    "carry things from place to place",
+    "patrol, give tours and fetch things",
+    "wave, nod, shake my head and point",
+)
 
 
 class Demo(Behaviour):
