@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import os
+import pathlib
 import tempfile
 from datetime import datetime
-from pathlib import Path
 from typing import Annotated, Any, Literal
 
-from fastapi import APIRouter, BackgroundTasks, Depends, HTTPException, Query, Request, Response
+from fastapi import APIRouter, BackgroundTasks, Depends, HTTPException, Path, Query, Request, Response
 from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import FileResponse
 from pydantic import BaseModel, ConfigDict, Field
@@ -35,6 +35,11 @@ RuntimeDep = Annotated[Runtime, Depends(runtime)]
 IMPORT_PATH = "/api/sessions/import"  # (its body limit is larger than the rest)
 
 
+# A row id as SQL stores it (a larger one is not a row: 422, not the database's overflow)
+SQL_INT_MAX = 2**63 - 1
+RowId = Annotated[int, Path(ge=1, le=SQL_INT_MAX)]
+
+
 def _exists(rt: Runtime, session_id: int) -> None:
     with rt.db() as db:
         if db.get(SessionRow, session_id) is None:
@@ -45,7 +50,7 @@ def _exists(rt: Runtime, session_id: int) -> None:
 def get_sessions(
     rt: RuntimeDep,
     limit: Annotated[int, Query(ge=1, le=200)] = 50,
-    offset: Annotated[int, Query(ge=0)] = 0,
+    offset: Annotated[int, Query(ge=0, le=SQL_INT_MAX)] = 0,
     started_from: Annotated[datetime | None, Query(alias="from", description="started at or after (ISO 8601)")] = None,
     started_to: Annotated[datetime | None, Query(alias="to", description="started at or before (ISO 8601)")] = None,
     outcome: Annotated[Literal[OUTCOMES] | None, Query()] = None,  # type: ignore[valid-type]
@@ -71,7 +76,7 @@ def get_sessions(
 
 
 @router.get("/sessions/{session_id}")
-def get_session(session_id: int, rt: RuntimeDep) -> dict[str, Any]:
+def get_session(session_id: RowId, rt: RuntimeDep) -> dict[str, Any]:
     """One session: everything recorded but telemetry (commands, transcripts, plans, steps, events) and its
     timeline; 404 when there is none."""
     with rt.db() as db:
@@ -83,7 +88,7 @@ def get_session(session_id: int, rt: RuntimeDep) -> dict[str, Any]:
 
 
 @router.delete("/sessions/{session_id}", dependencies=[Operator])
-def delete_session(session_id: int, rt: RuntimeDep) -> dict[str, Any]:
+def delete_session(session_id: RowId, rt: RuntimeDep) -> dict[str, Any]:
     """Delete a session and everything recorded in it, its recordings included. The session being recorded now
     cannot be deleted (409)."""
     if session_id == rt.recorder.session_id:
@@ -95,7 +100,7 @@ def delete_session(session_id: int, rt: RuntimeDep) -> dict[str, Any]:
 
 @router.get("/sessions/{session_id}/telemetry")
 def get_telemetry(
-    session_id: int,
+    session_id: RowId,
     rt: RuntimeDep,
     fields: Annotated[str, Query(max_length=300, description="comma-separated, e.g. com,battery_v,tick_ms")],
     max_points: Annotated[int, Query(ge=10, le=20000)] = 2000,
@@ -117,7 +122,7 @@ def get_telemetry(
 
 @router.get("/sessions/{session_id}/camera.jpg")
 def get_camera_frame(
-    session_id: int, rt: RuntimeDep, t: Annotated[float, Query(description="sim time (s)")]
+    session_id: RowId, rt: RuntimeDep, t: Annotated[float, Query(description="sim time (s)")]
 ) -> Response:
     """The head camera frame recorded at (or last before) simulated time `t`."""
     with rt.db() as db:
@@ -128,7 +133,7 @@ def get_camera_frame(
 
 
 @router.get("/sessions/{session_id}/transcripts/{transcript_id}/audio.wav")
-def get_recording(session_id: int, transcript_id: int, rt: RuntimeDep) -> FileResponse:
+def get_recording(session_id: RowId, transcript_id: RowId, rt: RuntimeDep) -> FileResponse:
     """The recording a transcript was made from; 404 when there is none (or it has been deleted)."""
     with rt.db() as db:
         row = db.get(TranscriptRow, transcript_id)
@@ -142,13 +147,13 @@ def get_recording(session_id: int, transcript_id: int, rt: RuntimeDep) -> FileRe
 
 @router.get("/sessions/{session_id}/export")
 async def export_session(
-    session_id: int, rt: RuntimeDep, background: BackgroundTasks, format: Literal["json", "mcap"] = "json"
+    session_id: RowId, rt: RuntimeDep, background: BackgroundTasks, format: Literal["json", "mcap"] = "json"
 ) -> FileResponse:
     """The session as one JSON document (importable again) or as MCAP with Foxglove schemas (Foxglove, Lichtblick)."""
     await run_in_threadpool(_exists, rt, session_id)
     descriptor, name = tempfile.mkstemp(prefix=f"session-{session_id}-", suffix=f".{format}")
     os.close(descriptor)
-    path = Path(name)
+    path = pathlib.Path(name)
     background.add_task(path.unlink, missing_ok=True)
     if format == "json":
         await run_in_threadpool(export_session_json, rt.db, session_id, path, rt.settings.audio_dir)
@@ -177,7 +182,7 @@ async def import_session_json(request: Request, rt: RuntimeDep) -> dict[str, Any
 
 class ReplayIn(BaseModel):
     model_config = ConfigDict(extra="forbid")
-    session_id: int = Field(ge=1)
+    session_id: int = Field(ge=1, le=SQL_INT_MAX)
     sim_time_s: float | None = Field(None, allow_inf_nan=False)
 
 
