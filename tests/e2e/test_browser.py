@@ -146,6 +146,7 @@ def test_keyboard_teleop_walks_the_robot_and_letting_go_stops_it(page, server) -
     assert not end["fallen"] and end["locomotion"]["phase"] == "standing"
     assert abs(end["pose"]["x"] - start["x"]) + abs(end["pose"]["y"] - start["y"]) > 0.1
     # the joystick drives too: drag the knob up, then let go
+    page.locator("#joystick").scroll_into_view_if_needed()  # (below the Behaviours panel: scrolled to, as a user would)
     box = page.locator("#joystick").bounding_box()
     cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
     page.mouse.move(cx, cy)
@@ -368,15 +369,17 @@ def test_a_command_spoken_into_the_microphone_is_heard_and_run(server, playwrigh
         page.locator("#ptt").dispatch_event("pointerdown")
         page.wait_for_timeout(int((0.25 + speech.duration_s + 0.6) * 1000))
         page.locator("#ptt").dispatch_event("pointerup")
-        expect(page.locator("#heard")).to_contain_text('heard "wait for three seconds"', timeout=20_000)
-        expect(page.locator("#command-text")).to_have_value("wait for three seconds")
+        # (whisper, the default recogniser, writes it as a sentence: "Wait for three seconds.")
+        said = re.compile(r'heard "wait for three seconds\.?"', re.IGNORECASE)
+        expect(page.locator("#heard")).to_contain_text(said, timeout=20_000)
+        expect(page.locator("#command-text")).to_have_value(re.compile(r"wait for three seconds\.?", re.IGNORECASE))
         if "press Send" in page.locator("#heard").inner_text():  # not sure enough to run unasked: confirm
             page.click("#send")
         expect(page.locator("#plan-steps li").first).to_contain_text("waited 3 s", timeout=30_000)
         # what was said is kept with the session, and can be listened to again
         session_id = httpx.get(f"{server.url}/api/health").json()["session_id"]
         page.goto(f"{server.url}/sessions?id={session_id}")
-        heard = page.locator("#timeline li.tl-heard").filter(has_text='heard "wait for three seconds"')
+        heard = page.locator("#timeline li.tl-heard").filter(has_text=said)
         expect(heard).to_have_count(1, timeout=15_000)
         expect(heard.locator("audio")).to_have_count(1)
     finally:
