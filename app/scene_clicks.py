@@ -4,17 +4,25 @@ operator in control, the e-stop rules, recorded with the session."""
 from __future__ import annotations
 
 import threading
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
-from app.auth.control import operator_refusal
+from app.auth.control import ControlLock, operator_refusal
 from app.auth.scene_tokens import SceneGrant
 from app.click_goal import Vector, click_plan
-from robot.interface import CommandReply, ExecutePlan, Level, Refusal
+from robot.interface import CommandReply, ExecutePlan, Level, Refusal, RobotPort
 
 if TYPE_CHECKING:
-    from app.runtime import Runtime
+    from app.sessions.recorder import SessionRecorder
 
 SOURCE = "3d_view"
+
+
+class ClickServer(Protocol):
+    """What a click needs of the running server (its `Runtime`): who is in control, the robot, the session."""
+
+    control: ControlLock
+    worker: RobotPort
+    recorder: SessionRecorder
 
 
 class SceneClicks:
@@ -22,7 +30,7 @@ class SceneClicks:
     a refusal makes no plan to show, so it is said in the events (every page lists them)."""
 
     def __init__(self) -> None:
-        self.runtime: Runtime | None = None  # told once the server's runtime exists (the views start before it)
+        self.runtime: ClickServer | None = None  # told once the server's runtime exists (the views start before it)
 
     def on_click(self, grant: SceneGrant, origin: Vector, direction: Vector) -> None:
         """Called on a gate's event loop (or the mirrors' pipe reader): the work goes to a thread of its own."""
