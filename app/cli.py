@@ -70,7 +70,7 @@ def _serve(args: argparse.Namespace, settings: Settings) -> int:
     # No per-message compression: deflating each page's copy of each state cost ~12 % of this process's interpreter
     # lock with 20 pages (`humanoid bench load`); the e-stop waits behind whatever holds that lock.
     uvicorn.run(
-        create_app(settings),
+        create_app(settings, relay_priority=True),
         host=settings.host,
         port=settings.port,
         log_level="warning",

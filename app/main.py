@@ -15,6 +15,7 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 from app.api import auth, behaviours, diagnostics, perception, robot, scene, sessions, speech
 from app.auth.middleware import AccessMiddleware
 from app.foxglove import proxy as foxglove_proxy
+from app.relay_priority import raise_relay_priority
 from app.runtime import Runtime
 from app.settings import REPO_ROOT, Settings, get_settings
 from app.ws import router as ws_router
@@ -80,8 +81,11 @@ def settle_garbage_collector() -> None:
     gc.freeze()
 
 
-def create_app(settings: Settings | None = None, runtime: Runtime | None = None) -> FastAPI:
-    """The app. Pass `runtime` to serve an already-started robot (tests); otherwise the lifespan starts one."""
+def create_app(
+    settings: Settings | None = None, runtime: Runtime | None = None, relay_priority: bool = False
+) -> FastAPI:
+    """The app. Pass `runtime` to serve an already-started robot (tests); otherwise the lifespan starts one.
+    `relay_priority`: run the event loop (the e-stop's relay) at a real-time priority (`humanoid serve` does)."""
     settings = settings or get_settings()
 
     @asynccontextmanager
@@ -90,6 +94,7 @@ def create_app(settings: Settings | None = None, runtime: Runtime | None = None)
         app.state.runtime = runtime or Runtime.start(settings)
         if owned:
             settle_garbage_collector()
+        app.state.relay_priority = raise_relay_priority() if relay_priority else "normal priority (not asked for)"
         try:
             yield
         finally:

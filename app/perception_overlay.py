@@ -2,12 +2,18 @@
 object where perception localised it (a box and a label).
 
 Viewers re-render on every update, in software on machines without a GPU, so nothing is sent unless it changed
-visibly: the scan when the robot moved or the scene did, the map when a cell changed, objects when they moved.
+visibly: the scan when the robot moved or the scene did, the map when what it shows changed (unknown, free,
+occupied: an occupancy value that drifts within its class is not a change; the few cells at the edge of the lidar's
+reach that flicker while the robot stands still wait up to 10 s) and at most once a second, objects when they
+moved. Each update a view receives makes it render for a quarter of a second: a map resent twice a second kept
+every idle view rendering all the time, 70 % of a core of software WebGL for two views (`humanoid bench core`).
 """
 
 from __future__ import annotations
 
 import math
+import time
+from collections.abc import Callable
 
 import numpy as np
 import viser
@@ -25,25 +31,38 @@ OBJECT_MOVE_M = 0.005
 # Occupancy colours (RGBA): unknown is transparent, free a pale wash, occupied dark.
 FREE_RGBA = (110, 160, 255, 60)  # a pale blue wash: visible on a light floor
 OCCUPIED_RGBA = (30, 30, 60, 210)
+OCCUPIED_FROM = 67  # occupancy (0-100) from which a cell is drawn occupied; -1 is unknown
+MAP_REDRAW_MIN_S = 1.0  # a map growing while the robot explores is redrawn at most this often
+MAP_CHANGED_SHARE = 0.01  # a redraw needs this share of the known cells changed (or MAP_CHANGED_CELLS) ...
+MAP_CHANGED_CELLS = 20
+MAP_REFRESH_S = 10.0  # ... or this long since the last one: a flickering cell or two can wait
+UNKNOWN, FREE, OCCUPIED = 0, 1, 2
 
 
-def map_rgba(grid: OccupancyMap) -> np.ndarray:
+def map_classes(grid: OccupancyMap) -> np.ndarray:
+    """What each cell shows (UNKNOWN, FREE or OCCUPIED); rows along y from the grid's origin, columns along x."""
+    data = np.frombuffer(grid.data, dtype=np.int8).reshape(grid.height, grid.width)
+    return (data >= 0).astype(np.uint8) + (data >= OCCUPIED_FROM).astype(np.uint8)
+
+
+def map_rgba(classes: np.ndarray) -> np.ndarray:
     """Rows along y from the grid's origin, columns along x: the orientation viser's image plane shows at
     identity rotation (its first row lies at local -y)."""
-    data = np.frombuffer(grid.data, dtype=np.int8).reshape(grid.height, grid.width)
-    image = np.zeros((grid.height, grid.width, 4), dtype=np.uint8)
-    image[data >= 0] = FREE_RGBA
-    image[data >= 67] = OCCUPIED_RGBA
+    image = np.zeros((*classes.shape, 4), dtype=np.uint8)
+    image[classes == FREE] = FREE_RGBA
+    image[classes == OCCUPIED] = OCCUPIED_RGBA
     return image
 
 
 class PerceptionOverlay:
-    def __init__(self, server: viser.ViserServer) -> None:
+    def __init__(self, server: viser.ViserServer, clock: Callable[[], float] = time.monotonic) -> None:
         self._scene = server.scene
+        self._clock = clock
         self._scan: viser.PointCloudHandle | None = None
         self._scan_drawn: ScanView | None = None
         self._map: viser.ImageHandle | None = None
-        self._map_drawn: bytes | None = None
+        self._map_drawn: tuple[tuple[float, float, float, float], np.ndarray] | None = None  # (geometry, classes)
+        self._map_drawn_at = -math.inf
         self._objects: dict[str, tuple[viser.BoxHandle, viser.LabelHandle, KnownObject]] = {}
 
     def update(self, scan: ScanView | None, grid: OccupancyMap | None, state: PerceptionState | None) -> bool:
@@ -52,9 +71,8 @@ class PerceptionOverlay:
         if scan is not None and self._scan_changed(scan):
             self._draw_scan(scan)
             changed = True
-        if grid is not None and grid.data != self._map_drawn:
-            self._draw_map(grid)
-            changed = True
+        if grid is not None and self._clock() - self._map_drawn_at >= MAP_REDRAW_MIN_S:
+            changed |= self._draw_map_if_changed(grid)
         if state is not None:
             changed |= self._draw_objects(state.known_objects)
         return changed
@@ -87,14 +105,24 @@ class PerceptionOverlay:
             self._scan.colors = np.tile(np.array(SCAN_COLOUR, dtype=np.uint8), (len(points), 1))
         self._scan_drawn = scan
 
-    def _draw_map(self, grid: OccupancyMap) -> None:
+    def _draw_map_if_changed(self, grid: OccupancyMap) -> bool:
+        geometry = (grid.origin[0], grid.origin[1], grid.resolution, float(grid.width))
+        classes = map_classes(grid)
+        if self._map_drawn is not None:
+            drawn_geometry, drawn_classes = self._map_drawn
+            if drawn_geometry == geometry and drawn_classes.shape == classes.shape:
+                changed = int(np.count_nonzero(drawn_classes != classes))
+                enough = max(MAP_CHANGED_CELLS, MAP_CHANGED_SHARE * np.count_nonzero(classes))
+                stale = self._clock() - self._map_drawn_at >= MAP_REFRESH_S
+                if changed == 0 or (changed < enough and not stale):
+                    return False
         width, height = grid.width * grid.resolution, grid.height * grid.resolution
         centre = (grid.origin[0] + width / 2, grid.origin[1] + height / 2, MAP_Z)
         if self._map is not None:
             self._map.remove()
         self._map = self._scene.add_image(
             "/perception/map",
-            map_rgba(grid),
+            map_rgba(classes),
             width,
             height,
             format="png",
@@ -102,7 +130,9 @@ class PerceptionOverlay:
             cast_shadow=False,
             receive_shadow=False,
         )
-        self._map_drawn = grid.data
+        self._map_drawn = (geometry, classes)
+        self._map_drawn_at = self._clock()
+        return True
 
     def _draw_objects(self, known: tuple[KnownObject, ...]) -> bool:
         changed = False

@@ -7,7 +7,7 @@ import dataclasses
 import time
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Depends, HTTPException, Response
+from fastapi import APIRouter, Depends, HTTPException, Request, Response
 from pydantic import BaseModel, ConfigDict, Field
 
 from app.api.deps import Operator, raise_if_refused, runtime
@@ -116,10 +116,11 @@ class PostureIn(BaseModel):
 
 
 @router.get("/health")
-async def health(rt: RuntimeDep, response: Response) -> dict[str, Any]:
+async def health(rt: RuntimeDep, request: Request, response: Response) -> dict[str, Any]:
     """200 while the robot worker runs and answers; 503 with the status and the reason when it does not:
     "worker_down" (not running: the robot is not driven) or "worker_not_answering" (frozen: noticed within a
-    second; the supervisor restarts it after a grace period)."""
+    second; the supervisor restarts it after a grace period). `relay_priority`: how the event loop, the
+    e-stop's relay, is scheduled."""
     state = rt.worker.state()
     status, reason = robot_health(rt)
     if status != "ok":
@@ -134,6 +135,7 @@ async def health(rt: RuntimeDep, response: Response) -> dict[str, Any]:
         "control": state_json(state)["control"],
         "session_id": rt.recorder.session_id,
         "mirrors": {name: {"port": rt.scene_port(name), "updates": m.updates} for name, m in rt.mirrors.items()},
+        "relay_priority": getattr(request.app.state, "relay_priority", "unknown"),
     }
 
 

@@ -3,7 +3,12 @@
 "use strict";
 
 const $ = (id) => document.getElementById(id);
-const humanoid = { ws: null, state: null, estopLatencies: [], estopParts: [], estopWaits: [], events: [], config: null,
+// The state comes 20 times a second: a text or class written unchanged still costs this page a style, layout and
+// paint pass, and the browser a composite, CPU that the e-stop's path competes for on a small machine.
+function setText(id, text) { const el = $(id); if (el.textContent !== text) el.textContent = text; }
+function setClass(id, cls) { const el = $(id); if (el.className !== cls) el.className = cls; }
+function setHidden(id, hidden) { const el = $(id); if (el.hidden !== hidden) el.hidden = hidden; }
+const humanoid = { setText, setClass, setHidden, ws: null, state: null, estopLatencies: [], estopParts: [], estopWaits: [], events: [], config: null,
                    planSources: {} };
 window.humanoid = humanoid;
 
@@ -73,7 +78,7 @@ function connect() {
   };
   ws.onmessage = (msg) => {
     const m = JSON.parse(msg.data);
-    if (m.type === "state") renderState(m.state);
+    if (m.type === "state") receiveState(m.state);
     else if (m.type === "event") addEvent(m.event);
     else if (m.type === "hello") {
       $("events").innerHTML = "";
@@ -224,32 +229,45 @@ $("run-edited").addEventListener("click", async () => {
 // ---- rendering -----------------------------------------------------------------------------------------------
 const fmt = (v, d = 2) => (v === null || v === undefined ? "–" : Number(v).toFixed(d));
 
-function renderState(s) {
+// The state arrives 20 times a second; the page shows it at most 10 times a second (a new mode or e-stop at once):
+// each showing is a layout, a paint and a composite, and the e-stop's press waits behind them on this thread.
+const STATE_SHOWN_EVERY_MS = 100;
+let stateTimer = null, shownAt = 0, shown = null;
+function receiveState(s) {
   humanoid.state = s;
+  const news = !shown || s.estop_latched !== shown.estop_latched || s.mode !== shown.mode || s.fallen !== shown.fallen;
+  const wait = STATE_SHOWN_EVERY_MS - (performance.now() - shownAt);
+  if (news || wait <= 0) { clearTimeout(stateTimer); stateTimer = null; renderState(s); }
+  else if (!stateTimer) stateTimer = setTimeout(() => { stateTimer = null; renderState(humanoid.state); }, wait);
+}
+
+function renderState(s) {
+  shown = s;
+  shownAt = performance.now();
   const latched = s.estop_latched;
-  $("mode").textContent = "mode: " + s.mode;
-  $("mode").className = "badge " + (latched || s.fallen ? "badge-err" : ["executing", "teleop"].includes(s.mode) ? "badge-warn" : "badge-ok");
-  $("latched-banner").hidden = !latched;
-  $("release").hidden = !latched;
+  setText("mode", "mode: " + s.mode);
+  setClass("mode", "badge " + (latched || s.fallen ? "badge-err" : ["executing", "teleop"].includes(s.mode) ? "badge-warn" : "badge-ok"));
+  setHidden("latched-banner", !latched);
+  setHidden("release", !latched);
   $("estop").classList.toggle("latched", latched);
   if (humanoid.renderTorque) humanoid.renderTorque(s.torque_enabled);
-  $("st-mode").textContent = s.mode + (s.fallen ? " (fallen)" : "");
-  $("st-pose").textContent = `x ${fmt(s.pose.x)} m, y ${fmt(s.pose.y)} m, z ${fmt(s.pose.z)} m, yaw ${fmt(s.pose.yaw_rad * 180 / Math.PI, 0)}°`;
-  $("st-tilt").textContent = `${fmt(s.tilt_deg, 1)}°`;
+  setText("st-mode", s.mode + (s.fallen ? " (fallen)" : ""));
+  setText("st-pose", `x ${fmt(s.pose.x)} m, y ${fmt(s.pose.y)} m, z ${fmt(s.pose.z)} m, yaw ${fmt(s.pose.yaw_rad * 180 / Math.PI, 0)}°`);
+  setText("st-tilt", `${fmt(s.tilt_deg, 1)}°`);
   const body = s.proprioception;
   if (body) {
     const [w, x, y, z] = body.orientation;
     const roll = Math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y)) * 180 / Math.PI;
     const pitch = Math.asin(Math.max(-1, Math.min(1, 2 * (w * y - z * x)))) * 180 / Math.PI;
     const gyro = Math.hypot(...body.angular_velocity);
-    $("st-imu").textContent = `${fmt(roll, 1)}° / ${fmt(pitch, 1)}°, ${fmt(gyro, 2)} rad/s`;
+    setText("st-imu", `${fmt(roll, 1)}° / ${fmt(pitch, 1)}°, ${fmt(gyro, 2)} rad/s`);
     const sum = (a) => a.reduce((p, q) => p + q, 0);
-    $("st-feet").textContent = `${fmt(sum(body.left_foot_n), 1)} N / ${fmt(sum(body.right_foot_n), 1)} N`;
+    setText("st-feet", `${fmt(sum(body.left_foot_n), 1)} N / ${fmt(sum(body.right_foot_n), 1)} N`);
   }
-  $("st-time").textContent = `${fmt(s.sim_time_s, 1)} s`;
-  $("st-rtf").textContent = fmt(s.control.rtf, 2);
-  $("st-tick").textContent = `${fmt(s.control.tick_p50_ms, 2)} / ${fmt(s.control.tick_p99_ms, 2)} ms, ${s.control.deadline_misses} missed`;
-  $("st-held").textContent = s.held_object || "nothing";
+  setText("st-time", `${fmt(s.sim_time_s, 1)} s`);
+  setText("st-rtf", fmt(s.control.rtf, 2));
+  setText("st-tick", `${fmt(s.control.tick_p50_ms, 2)} / ${fmt(s.control.tick_p99_ms, 2)} ms, ${s.control.deadline_misses} missed`);
+  setText("st-held", s.held_object || "nothing");
   if (humanoid.renderLocomotion) humanoid.renderLocomotion(s.locomotion);
   if (humanoid.renderPerception) humanoid.renderPerception(s.perception, s.locomotion);
   if (humanoid.renderBehaviour) humanoid.renderBehaviour(s.behaviour);

@@ -63,6 +63,7 @@
         const bitmap = await createImageBitmap(await response.blob());
         if (view.mapImage) view.mapImage.close();
         view.mapImage = bitmap;
+        view.mapVersion = (view.mapVersion || 0) + 1;
         drawMap();
       }
     } catch (e) { /* the next refresh retries */ }
@@ -70,9 +71,17 @@
   }
 
   // World (x, y) to map canvas pixels: the map image is drawn to fit, +y up.
+  // Redrawn only when something on it changed (a new map, an object, the robot's pose): an unchanged canvas
+  // redrawn 4 times a second is a repaint and a composite for nothing.
+  let lastMapKey = "";
   function drawMap() {
     const img = view.mapImage, info = view.mapInfo;
     if (!img || !info) return;
+    const pose = view.loco ? view.loco.estimated_pose.map((v) => v.toFixed(2)).join() : "";
+    const objects = ((view.perception && view.perception.known_objects) || []).map((o) => o.position.join()).join(";");
+    const key = `${view.mapVersion}|${pose}|${objects}`;
+    if (key === lastMapKey) return;
+    lastMapKey = key;
     const scale = Math.min(map.width / img.width, map.height / img.height) * 1.6; // zoom on the middle
     const w = img.width * scale, h = img.height * scale;
     const left = (map.width - w) / 2, top = (map.height - h) / 2;
@@ -93,17 +102,16 @@
       mctx.beginPath(); mctx.arc(px, py, 5, 0, 2 * Math.PI); mctx.fill();
       mctx.beginPath(); mctx.moveTo(px, py); mctx.lineTo(px + 14 * Math.cos(yaw), py - 14 * Math.sin(yaw)); mctx.stroke();
     }
-    $("map-info").textContent = `occupancy map: ${info.scans} scans, ${(info.res * 100).toFixed(0)} cm cells (black occupied, white free)`;
+    humanoid.setText("map-info", `occupancy map: ${info.scans} scans, ${(info.res * 100).toFixed(0)} cm cells (black occupied, white free)`);
   }
 
   let lastKnown = "";
   humanoid.renderPerception = function (p, loco) {
     view.perception = p;
     view.loco = loco;
-    const status = $("perc-status");
-    if (!p) { status.textContent = "off"; return; }
-    status.textContent = p.status === "ok" ? `camera ${p.camera_hz.toFixed(1)} Hz · lidar ${p.lidar_hz.toFixed(1)} Hz` : p.status;
-    status.className = "badge " + (p.status === "ok" ? "badge-ok" : p.status === "starting" ? "badge-warn" : "badge-err");
+    if (!p) { humanoid.setText("perc-status", "off"); return; }
+    humanoid.setText("perc-status", p.status === "ok" ? `camera ${p.camera_hz.toFixed(1)} Hz · lidar ${p.lidar_hz.toFixed(1)} Hz` : p.status);
+    humanoid.setClass("perc-status", "badge " + (p.status === "ok" ? "badge-ok" : p.status === "starting" ? "badge-warn" : "badge-err"));
     const key = JSON.stringify(p.known_objects);
     if (key !== lastKnown) {
       lastKnown = key;

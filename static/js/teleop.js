@@ -123,10 +123,9 @@
     action("/api/torque", { enabled: !on });
   });
   window.humanoid.renderTorque = (enabled) => {
-    const button = $("torque");
-    button.hidden = enabled === null || enabled === undefined;
-    button.textContent = enabled ? "Torque off" : "Torque on";
-    button.classList.toggle("primary", !enabled);
+    window.humanoid.setHidden("torque", enabled === null || enabled === undefined);
+    window.humanoid.setText("torque", enabled ? "Torque off" : "Torque on");
+    $("torque").classList.toggle("primary", !enabled);
   };
 
   // refusals come back on the socket (e.g. a plan is running, e-stop latched)
@@ -139,8 +138,8 @@
     if (!loco) return;
     const [vx, vy, w] = loco.velocity;
     const [ex, ey, eyaw] = loco.estimated_pose;
-    $("st-walk").textContent = `${loco.phase}, ${loco.posture}; ${vx.toFixed(2)} / ${vy.toFixed(2)} m/s, ` +
-      `${w.toFixed(2)} rad/s`;
-    $("st-odom").textContent = `x ${ex.toFixed(2)} m, y ${ey.toFixed(2)} m, yaw ${(eyaw * 180 / Math.PI).toFixed(0)}°`;
+    window.humanoid.setText("st-walk", `${loco.phase}, ${loco.posture}; ${vx.toFixed(2)} / ${vy.toFixed(2)} m/s, ` +
+      `${w.toFixed(2)} rad/s`);
+    window.humanoid.setText("st-odom", `x ${ex.toFixed(2)} m, y ${ey.toFixed(2)} m, yaw ${(eyaw * 180 / Math.PI).toFixed(0)}°`);
   };
 })();

@@ -122,3 +122,67 @@ def test_mirror_draws_scan_map_and_seen_objects_and_only_resends_changes(make_wo
         np.testing.assert_allclose(overlay._scan.points[:, 0].max(), 1.5, atol=1e-2)
     finally:
         mirror.stop()
+
+
+class _RecordingScene:
+    """Stands in for viser's scene: counts the map images sent to viewers."""
+
+    def __init__(self) -> None:
+        self.images: list[np.ndarray] = []
+
+    def add_image(self, name, image, *args, **kwargs):
+        self.images.append(image)
+        return _Removable()
+
+
+class _Removable:
+    def remove(self) -> None:
+        pass
+
+
+def test_the_map_is_resent_only_when_what_it_shows_changed_and_at_most_once_a_second() -> None:
+    """Each update makes every open 3D view render for a while (in software on machines without a GPU): a map whose
+    occupancy values drift within their class (free stays free) is not resent, a growing map at most 1/s, and a
+    cell or two flickering at the lidar's reach only now and then."""
+    from types import SimpleNamespace
+
+    from app.perception_overlay import (
+        FREE_RGBA,
+        MAP_CHANGED_CELLS,
+        MAP_REDRAW_MIN_S,
+        MAP_REFRESH_S,
+        OCCUPIED_RGBA,
+        PerceptionOverlay,
+    )
+
+    scene, now = _RecordingScene(), [100.0]
+    overlay = PerceptionOverlay(SimpleNamespace(scene=scene), clock=lambda: now[0])
+    side = 20
+
+    def grid(values: np.ndarray) -> OccupancyMap:
+        return OccupancyMap(1.0, 0.05, (-1.0, -1.0), side, side, values.astype(np.int8).tobytes(), 5)
+
+    values = np.full((side, side), -1)
+    values[:10, :] = 10  # free
+    values[0, 0] = 80  # occupied
+    assert overlay.update(None, grid(values), None)
+    assert len(scene.images) == 1
+    image = scene.images[0]
+    assert tuple(image[0, 0]) == OCCUPIED_RGBA and tuple(image[0, 1]) == FREE_RGBA and image[15, 0, 3] == 0
+
+    now[0] += MAP_REDRAW_MIN_S / 10
+    values[10:12, :] = 10  # the map grows by 40 cells ...
+    assert not overlay.update(None, grid(values), None)  # ... but too soon after the last picture
+    now[0] += MAP_REDRAW_MIN_S
+    assert overlay.update(None, grid(values), None)  # so it comes with the next update after 1 s
+    assert len(scene.images) == 2 and scene.images[1][11, 0, 3] > 0
+
+    now[0] += 2 * MAP_REDRAW_MIN_S
+    drifted = values.copy()
+    drifted[drifted == 10] = 30  # values drift, the picture does not
+    assert not overlay.update(None, grid(drifted), None)
+    drifted[19, : MAP_CHANGED_CELLS // 4] = 5  # a few cells flicker at the edge of the lidar's reach
+    assert not overlay.update(None, grid(drifted), None)
+    now[0] += MAP_REFRESH_S
+    assert overlay.update(None, grid(drifted), None)  # shown, but only after a while
+    assert len(scene.images) == 3 and scene.images[2][19, 0, 3] > 0
