@@ -13,16 +13,16 @@ from app.auth.control import ControlLock
 from app.auth.scene_tokens import SceneTokens
 from app.auth.store import UserStore
 from app.foxglove.live import LiveFoxglove
-from app.mirror import FULL, LIGHT, SceneMirror, open_views
-from app.mirror_process import MirrorProcess, RemoteMirror
-from app.replay import SessionReplay
-from app.scene_clicks import SceneClicks
-from app.scene_gate import SceneGate
 from app.sessions.db import make_engine, make_session_factory, upgrade_to_head
 from app.sessions.maintenance import apply_retention, close_interrupted_sessions
 from app.sessions.recorder import SessionRecorder
 from app.settings import Settings
 from app.supervisor import WorkerSupervisor
+from app.viz.mirror import FULL, LIGHT, SceneMirror, open_views
+from app.viz.mirror_process import MirrorProcess, RemoteMirror
+from app.viz.replay import SessionReplay
+from app.viz.scene_clicks import SceneClicks
+from app.viz.scene_gate import SceneGate
 from robot.interface import RobotPort
 from robot.model.world import generate_world
 from robot.process import HardwareSpec, WorkerProcess

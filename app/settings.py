@@ -11,7 +11,7 @@ from typing import Literal
 from pydantic import AliasChoices, Field
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
-from app.tls import TlsFiles
+from app.web.tls import TlsFiles
 from robot.diagnostics.thresholds import Thresholds
 from robot.hardware.config import HardwareConfig, default_config, load_config
 from robot.planning.pipeline import PlannerConfig

@@ -1,6 +1,6 @@
 """Write the documentation's reference pages from the code, so they cannot drift from it:
 
-- docs/reference/api.md from the app's OpenAPI schema (`app.main.create_app().openapi()`);
+- docs/reference/api.md from the app's OpenAPI schema (`app.web.main.create_app().openapi()`);
 - docs/reference/cli.md from `humanoid --help` and every subcommand's `--help`.
 
 Both are committed (they read on GitHub too). `--check` (run by `make test`) writes nothing and fails when a
@@ -205,7 +205,7 @@ def _command_tree(help_of: Any, argv: list[str]) -> list[list[str]]:
 
 def humanoid_help(argv: list[str]) -> str:
     """`humanoid *argv --help` in this process (the parser alone: nothing starts)."""
-    from app.cli import build_parser
+    from app.cli.main import build_parser
 
     os.environ["COLUMNS"] = HELP_COLUMNS
     output = io.StringIO()
@@ -218,7 +218,7 @@ def humanoid_help(argv: list[str]) -> str:
 
 
 def pages() -> dict[Path, str]:
-    from app.main import create_app
+    from app.web.main import create_app
 
     return {API_PAGE: api_markdown(create_app().openapi()), CLI_PAGE: cli_markdown(humanoid_help)}
 

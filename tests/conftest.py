@@ -15,9 +15,9 @@ import mujoco
 import pytest
 from fastapi.testclient import TestClient
 
-from app.main import create_app
 from app.runtime import Runtime
 from app.settings import Settings
+from app.web.main import create_app
 from robot.diagnostics.thresholds import Thresholds
 from robot.model.scene import build_scene
 from robot.model.world import WorldLayout, generate_world

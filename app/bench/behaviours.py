@@ -95,7 +95,7 @@ class Judge:
 
 def run_one(behaviour: str, seed: int) -> dict[str, Any]:
     """One behaviour on world `seed`, in a fresh simulation, judged by the simulator."""
-    from app.headless_behaviour import run_behaviour
+    from app.cli.headless_behaviour import run_behaviour
     from app.settings import Settings
     from robot.interface import RunCommand
     from robot.model.world import generate_world

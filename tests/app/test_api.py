@@ -340,8 +340,8 @@ def test_the_spoken_stop_can_be_turned_off(client, monkeypatch) -> None:
 def whisper_client(settings, make_worker):
     from fastapi.testclient import TestClient
 
-    from app.main import create_app
     from app.runtime import Runtime
+    from app.web.main import create_app
 
     settings = settings.model_copy(update={"asr_engine": "auto"})
     runtime = Runtime.start(settings, worker=make_worker(realtime=True))

@@ -16,10 +16,10 @@ import pytest
 from fastapi.testclient import TestClient
 from sqlalchemy import select
 
-from app.api import speech
-from app.main import create_app
 from app.runtime import Runtime
 from app.sessions.models import TranscriptRow
+from app.web.api import speech
+from app.web.main import create_app
 from robot.speech.tts import synthesize
 from tests.app.test_api import wait_until
 

@@ -12,9 +12,9 @@ from fastapi.testclient import TestClient
 import robot.robot as robot_module
 from app.auth.roles import Role
 from app.auth.store import UserStore
-from app.main import create_app
 from app.runtime import Runtime
 from app.sessions.db import make_engine, make_session_factory, upgrade_to_head
+from app.web.main import create_app
 from robot.behaviours.api import Behaviour, Param
 from robot.behaviours.registry import Registry, discover
 

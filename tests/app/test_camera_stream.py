@@ -8,7 +8,7 @@ import asyncio
 import cv2
 import numpy as np
 
-from app.camera_stream import PageFrames, scale_jpeg
+from app.web.camera_stream import PageFrames, scale_jpeg
 from robot.interface import CameraImage
 
 

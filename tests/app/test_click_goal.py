@@ -9,8 +9,8 @@ import pytest
 
 from app.auth.roles import Principal, Role
 from app.auth.scene_tokens import SceneGrant
-from app.click_goal import click_plan, floor_point
-from app.scene_clicks import SceneClicks
+from app.viz.click_goal import click_plan, floor_point
+from app.viz.scene_clicks import SceneClicks
 from robot.interface import Refusal
 from tests.app.test_api import wait_until
 

@@ -11,8 +11,8 @@ import pytest
 from fastapi.testclient import TestClient
 from prometheus_client.parser import text_string_to_metric_families
 
-from app.main import create_app
 from app.runtime import Runtime
+from app.web.main import create_app
 from robot.diagnostics.thresholds import Thresholds
 from tests.app.test_api import wait_until
 

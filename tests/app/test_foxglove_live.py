@@ -19,8 +19,8 @@ from starlette.websockets import WebSocketDisconnect
 
 from app.auth.roles import Role
 from app.foxglove import channels as topics
-from app.main import create_app
 from app.runtime import Runtime
+from app.web.main import create_app
 from tests.app.test_access import PASSWORD, user_store
 
 LIVE_TOPICS = {

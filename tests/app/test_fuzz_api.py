@@ -8,8 +8,8 @@ import math
 
 import pytest
 
-from app.main import create_app
 from app.runtime import Runtime
+from app.web.main import create_app
 
 schemathesis = pytest.importorskip("schemathesis")
 hypothesis = pytest.importorskip("hypothesis")

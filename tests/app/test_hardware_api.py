@@ -10,8 +10,8 @@ from collections.abc import Iterator
 import pytest
 from fastapi.testclient import TestClient
 
-from app.main import create_app
 from app.runtime import Runtime
+from app.web.main import create_app
 from robot.hardware import control_table as ct
 from robot.hardware.bus_emulator import BusEmulator
 from robot.hardware.config import default_config

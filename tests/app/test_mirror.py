@@ -6,7 +6,7 @@ import dataclasses
 
 import numpy as np
 
-from app.mirror import VISIBLE_CHANGE, SceneMirror
+from app.viz.mirror import VISIBLE_CHANGE, SceneMirror
 from robot.interface import KnownObject, OccupancyMap, PerceptionState, ScanView, SensorFeed
 
 
@@ -48,7 +48,7 @@ def test_mirror_pushes_visible_motion_only(make_worker) -> None:
 def test_light_profile_is_a_much_lighter_scene_of_the_same_robot(make_worker) -> None:
     import mujoco
 
-    from app.mirror import FULL, LIGHT, mirror_model
+    from app.viz.mirror import FULL, LIGHT, mirror_model
 
     xml = make_worker(realtime=False).describe().mjcf_xml
 
@@ -146,7 +146,7 @@ def test_the_map_is_resent_only_when_what_it_shows_changed_and_at_most_once_a_se
     cell or two flickering at the lidar's reach only now and then."""
     from types import SimpleNamespace
 
-    from app.perception_overlay import (
+    from app.viz.perception_overlay import (
         FREE_RGBA,
         MAP_CHANGED_CELLS,
         MAP_REDRAW_MIN_S,

@@ -15,7 +15,7 @@ import websockets
 from app.auth.roles import Principal, Role
 from app.auth.scene_tokens import SceneGrant, SceneTokens
 from app.bench.server import free_port
-from app.mirror_process import MIRROR_NICE, MirrorProcess
+from app.viz.mirror_process import MIRROR_NICE, MirrorProcess
 from robot.interface import StopTeleop, Teleop
 from robot.process import WorkerProcess
 from tests.app.test_api import wait_until

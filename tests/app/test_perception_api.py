@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
-from app.main import create_app
 from app.runtime import Runtime
 from app.settings import Settings
+from app.web.main import create_app
 
 
 @pytest.fixture

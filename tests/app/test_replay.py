@@ -7,8 +7,8 @@ import time
 import numpy as np
 import pytest
 
-from app.replay import ReplayError, SessionReplay
 from app.sessions.queries import load_telemetry
+from app.viz.replay import ReplayError, SessionReplay
 from tests.app.session_helpers import record_session
 
 

@@ -14,7 +14,7 @@ from cryptography.x509 import DNSName, IPAddress
 from cryptography.x509.verification import PolicyBuilder, Store, VerificationError
 
 from app.bench.server import ServerProcess
-from app.tls import ensure_certificate
+from app.web.tls import ensure_certificate
 
 
 def _alternative_names(path: str) -> set[str]:

@@ -9,7 +9,7 @@ import psutil
 import pytest
 
 from app.bench.server import ServerProcess
-from app.relay_priority import RELAY_FIFO_PRIORITY, thread_scheduling
+from app.web.relay_priority import RELAY_FIFO_PRIORITY, thread_scheduling
 
 pytestmark = pytest.mark.slow
 

@@ -205,14 +205,14 @@ def test_the_checks_find_a_three_module_cycle_a_long_class_an_app_import_and_a_p
             "pkg/b.py": "def thing():\n    from pkg import c\n",
             "pkg/c.py": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from pkg.a import x\n",
             "pkg/big.py": f"class Big:\n{long_body}\n",
-            "pkg/web.py": "from app.main import create_app\n",
+            "pkg/web.py": "from app.web.main import create_app\n",
             "pkg/nosy.py": "class Nosy:\n    def peek(self, other):\n        return other._secret + self._own\n",
             "pkg/helper.py": "from pkg.a import _hidden\n",
         },
     )
     assert import_cycles(import_graph(modules, tmp_path)) == [["pkg.a", "pkg.b", "pkg.c", "pkg.a"]]
     assert long_classes(modules) == ["pkg.big.Big: 501 lines (line 1)"]
-    assert app_imports(modules) == ["pkg.web:1 imports app.main", "pkg.web:1 imports app.main.create_app"]
+    assert app_imports(modules) == ["pkg.web:1 imports app.web.main", "pkg.web:1 imports app.web.main.create_app"]
     assert private_reaches(modules) == ["pkg.helper:1 from pkg.a import _hidden", "pkg.nosy:3 other._secret"]
 
 

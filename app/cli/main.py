@@ -9,10 +9,10 @@ import ssl
 import sys
 
 from app.auth.cli import add_users_parser
+from app.cli.hardware import add_hardware_parser
 from app.deploy.db_cli import add_db_parser
 from app.deploy.doctor.cli import add_doctor_parser
 from app.deploy.service_cli import add_service_parser
-from app.hardware_cli import add_hardware_parser
 from app.sessions.cli import add_sessions_parser
 from app.settings import Settings, get_settings
 
@@ -21,8 +21,8 @@ def _serve(args: argparse.Namespace, settings: Settings) -> int:
     import uvicorn
 
     from app.auth.access import InsecureBind
-    from app.main import create_app
     from app.sessions.db import upgrade_to_head
+    from app.web.main import create_app
 
     http_port, device = _split_port(args.port)
     overrides = {
@@ -86,7 +86,7 @@ def _tls_files(args: argparse.Namespace, settings: Settings):  # type: ignore[no
     """The certificate given (both files, readable and matching), or the robot's own for its names (made once)."""
     from pathlib import Path
 
-    from app.tls import TlsFiles, ensure_certificate
+    from app.web.tls import TlsFiles, ensure_certificate
 
     if args.tls_cert or args.tls_key:
         if not (args.tls_cert and args.tls_key):
@@ -166,7 +166,7 @@ def _transcribe(args: argparse.Namespace, settings: Settings) -> int:
 
 
 def _run(args: argparse.Namespace, settings: Settings) -> int:
-    from app.headless import run_command
+    from app.cli.headless import run_command
 
     heard = None
     if args.audio:
@@ -286,7 +286,7 @@ def _describe(args: argparse.Namespace, settings: Settings) -> int:
 
 
 def _behaviours_list(args: argparse.Namespace, settings: Settings) -> int:
-    from app.headless_behaviour import list_behaviours
+    from app.cli.headless_behaviour import list_behaviours
 
     listed = list_behaviours()
     if args.json:
@@ -303,7 +303,7 @@ def _behaviours_list(args: argparse.Namespace, settings: Settings) -> int:
 
 
 def _behaviours_run(args: argparse.Namespace, settings: Settings) -> int:
-    from app.headless_behaviour import parse_settings, run_behaviour
+    from app.cli.headless_behaviour import parse_settings, run_behaviour
 
     try:
         params = parse_settings(args.set or [])

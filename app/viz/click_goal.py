@@ -2,7 +2,7 @@
 validated and executed like any other plan (refused while the e-stop is latched, shown in the plan panel).
 
 The 3D view only turns shift+clicks on (`enable_clicks`); the click itself reaches the web server through the
-views' gate with who made it (`app.scene_gate`), and becomes a command there (`app.scene_clicks`)."""
+views' gate with who made it (`app.viz.scene_gate`), and becomes a command there (`app.viz.scene_clicks`)."""
 
 from __future__ import annotations
 

@@ -12,13 +12,13 @@ from fastapi.responses import FileResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from app.api import auth, behaviours, diagnostics, perception, robot, scene, sessions, speech
 from app.auth.middleware import AccessMiddleware
 from app.foxglove import proxy as foxglove_proxy
-from app.relay_priority import raise_relay_priority
 from app.runtime import Runtime
 from app.settings import REPO_ROOT, Settings, get_settings
-from app.ws import router as ws_router
+from app.web.api import auth, behaviours, diagnostics, perception, robot, scene, sessions, speech
+from app.web.relay_priority import raise_relay_priority
+from app.web.ws import router as ws_router
 
 STATIC_DIR = REPO_ROOT / "static"
 

@@ -27,13 +27,13 @@ from typing import Any
 
 from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 
-from app.api.robot import TELEOP_MAX_SPEED_M_S, TELEOP_MAX_YAW_RATE
 from app.auth.control import operator_refusal
 from app.auth.roles import LOCAL_OPERATOR, Principal
-from app.browser_feed import BrowserFeed
-from app.robot_calls import ask, tell
 from app.runtime import Runtime
-from app.serialize import event_json, reply_json
+from app.web.api.robot import TELEOP_MAX_SPEED_M_S, TELEOP_MAX_YAW_RATE
+from app.web.browser_feed import BrowserFeed
+from app.web.robot_calls import ask, tell
+from app.web.serialize import event_json, reply_json
 from robot.interface import Command, EStop, OperatorHeartbeat, ReleaseEStop, StopTeleop, Teleop
 
 router = APIRouter()

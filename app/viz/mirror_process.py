@@ -6,7 +6,7 @@ p99 77 ms from the browser to the robot (`humanoid bench load`, py-spy). Here th
 operating system serves the web server (and the robot) first.
 
 Data flow: the robot process's state and sensor-feed messages reach this process as they came (still pickled:
-the web server does not encode them again). The views' gates (`app.scene_gate`) run here too, so the pages' 3D
+the web server does not encode them again). The views' gates (`app.viz.scene_gate`) run here too, so the pages' 3D
 traffic never touches the web server; a click in a 3D view goes back with who made it, for the web server to
 check and turn into a command.
 Wire protocol (one duplex pipe, pickles): parent -> child: raw ("state", ...) / ("feed", ...) messages,
@@ -27,8 +27,8 @@ from dataclasses import dataclass
 from multiprocessing.connection import Connection
 
 from app.auth.scene_tokens import SceneTokens
-from app.scene_gate import ClickHandler
-from app.tls import TlsFiles
+from app.viz.scene_gate import ClickHandler
+from app.web.tls import TlsFiles
 from robot.interface import RobotDescription, RobotState, SensorFeed
 from robot.process import WorkerProcess, merge_feed
 
@@ -182,7 +182,7 @@ def mirror_main(
 
     try:
         os.nice(MIRROR_NICE)
-        from app.mirror import open_views
+        from app.viz.mirror import open_views
 
         tokens = SceneTokens(secret)
         port = PipedPort(description)

@@ -7,7 +7,7 @@ from fastapi import Depends, HTTPException, Request
 from app.auth.control import VIEWER_REFUSAL, ControlHeld
 from app.auth.roles import Principal, Role
 from app.runtime import Runtime
-from app.serialize import reply_json
+from app.web.serialize import reply_json
 from robot.interface import CommandReply, Refusal
 
 REFUSAL_STATUS = {

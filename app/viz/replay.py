@@ -21,10 +21,10 @@ from mjviser.scene import ViserMujocoScene
 from sqlalchemy.orm import sessionmaker
 from viser import uplot
 
-from app.mirror import LIGHT, MirrorProfile, mirror_model
 from app.sessions.models import SessionRow
 from app.sessions.queries import load_telemetry, session_detail
 from app.sessions.scene import session_scene
+from app.viz.mirror import LIGHT, MirrorProfile, mirror_model
 from robot.telemetry import TelemetryLayout
 
 log = logging.getLogger(__name__)
@@ -103,7 +103,7 @@ class SessionReplay:
         self._factory = factory
         self._profile = profile
         self._lock = threading.RLock()
-        # on loopback: browsers come through its gate (`app.scene_gate`), which checks their login
+        # on loopback: browsers come through its gate (`app.viz.scene_gate`), which checks their login
         self.server = viser.ViserServer(host="127.0.0.1", port=0, label="humanoid session replay", verbose=False)
         self.server.initial_camera.position = (-3.2, -2.8, 3.0)
         self.server.initial_camera.look_at = (0.0, 0.0, 0.2)

@@ -3,7 +3,7 @@
 `/ws/camera` streams frames to the page: for each new frame a JSON message {"type": "frame", seq, sim_time_s,
 width, height, detections, camera_hz} followed by one binary message, the JPEG. The detections belong to exactly
 the frame they precede, so overlays never lag the image; their boxes are in the camera's pixels (width x height),
-while the JPEG is scaled to the page's width (`camera_stream_width`, see `app.camera_stream`). `/api/camera.jpg`
+while the JPEG is scaled to the page's width (`camera_stream_width`, see `app.web.camera_stream`). `/api/camera.jpg`
 is the camera's whole image.
 """
 
@@ -19,9 +19,9 @@ import cv2
 import numpy as np
 from fastapi import APIRouter, Depends, HTTPException, Response, WebSocket, WebSocketDisconnect
 
-from app.api.deps import runtime
-from app.camera_stream import PageFrames
 from app.runtime import Runtime
+from app.web.api.deps import runtime
+from app.web.camera_stream import PageFrames
 from robot.interface import CameraImage, OccupancyMap, PerceptionState, ScanView
 
 router = APIRouter(tags=["perception"])

@@ -15,11 +15,11 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, Request
 
-from app.api.deps import principal, runtime
 from app.auth.access import COOKIE_NAME, LOGIN_TTL_S
 from app.auth.roles import Principal
 from app.auth.scene_tokens import login_id
 from app.runtime import Runtime
+from app.web.api.deps import principal, runtime
 
 router = APIRouter(prefix="/api", tags=["3d views"])
 RuntimeDep = Annotated[Runtime, Depends(runtime)]

@@ -8,11 +8,11 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Depends, Response
 from pydantic import BaseModel, ConfigDict, Field
 
-from app.api.deps import Operator, raise_if_refused, runtime
 from app.diagnostics import diagnostics_json, prometheus_text, snapshot
-from app.robot_calls import ask
 from app.runtime import Runtime
-from app.serialize import reply_json
+from app.web.api.deps import Operator, raise_if_refused, runtime
+from app.web.robot_calls import ask
+from app.web.serialize import reply_json
 from robot.interface import Fault, InjectFault
 
 router = APIRouter(tags=["diagnostics"])

@@ -10,11 +10,11 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Depends, HTTPException, Request, Response
 from pydantic import BaseModel, ConfigDict, Field
 
-from app.api.deps import Operator, raise_if_refused, runtime
 from app.diagnostics import robot_health
-from app.robot_calls import IMMEDIATE_TIMEOUT_S, PLANNING_TIMEOUT_S, ask
 from app.runtime import Runtime
-from app.serialize import event_json, reply_json, state_json
+from app.web.api.deps import Operator, raise_if_refused, runtime
+from app.web.robot_calls import IMMEDIATE_TIMEOUT_S, PLANNING_TIMEOUT_S, ask
+from app.web.serialize import event_json, reply_json, state_json
 from robot.interface import (
     ApprovePlan,
     CancelPlan,

@@ -7,11 +7,11 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from app.serialize import behaviour_info_json
 from app.sessions.db import make_engine, make_session_factory, upgrade_to_head
 from app.sessions.maintenance import close_interrupted_sessions
 from app.sessions.recorder import SessionRecorder
 from app.settings import Settings
+from app.web.serialize import behaviour_info_json
 from robot.behaviours.registry import discover
 from robot.interface import BehaviourState, RobotState, StartBehaviour
 from robot.model.world import generate_world

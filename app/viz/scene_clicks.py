@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Protocol
 
 from app.auth.control import ControlLock, operator_refusal
 from app.auth.scene_tokens import SceneGrant
-from app.click_goal import Vector, click_plan
+from app.viz.click_goal import Vector, click_plan
 from robot.interface import CommandReply, ExecutePlan, Level, Refusal, RobotPort
 
 if TYPE_CHECKING:

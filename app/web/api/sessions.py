@@ -13,8 +13,6 @@ from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import FileResponse
 from pydantic import BaseModel, ConfigDict, Field
 
-from app.api.deps import Operator, runtime
-from app.replay import ReplayError
 from app.runtime import Runtime
 from app.sessions.archive import ArchiveError, export_session_json, import_session, read_archive
 from app.sessions.audio_store import recording_file
@@ -29,6 +27,8 @@ from app.sessions.queries import (
     session_detail,
     telemetry_series,
 )
+from app.viz.replay import ReplayError
+from app.web.api.deps import Operator, runtime
 
 router = APIRouter(prefix="/api", tags=["sessions"])
 RuntimeDep = Annotated[Runtime, Depends(runtime)]

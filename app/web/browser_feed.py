@@ -13,10 +13,10 @@ import json
 import time
 from typing import Any
 
-from app.api.auth import control_json
 from app.diagnostics import diagnostics_json, snapshot
 from app.runtime import Runtime
-from app.serialize import state_json
+from app.web.api.auth import control_json
+from app.web.serialize import state_json
 
 DIAGNOSTICS_PERIOD_S = 1.0
 IDLE_STOP_S = 5.0  # with no page left for this long the encoding task ends (the next page starts it again)

@@ -9,10 +9,10 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Depends
 from pydantic import BaseModel, ConfigDict, Field
 
-from app.api.deps import Operator, raise_if_refused, runtime
-from app.robot_calls import ask
 from app.runtime import Runtime
-from app.serialize import behaviour_info_json, behaviour_status_json, reply_json
+from app.web.api.deps import Operator, raise_if_refused, runtime
+from app.web.robot_calls import ask
+from app.web.serialize import behaviour_info_json, behaviour_status_json, reply_json
 from robot.interface import Command, PauseBehaviour, ResumeBehaviour, StartBehaviour, StopBehaviour
 
 router = APIRouter(prefix="/api/behaviours", tags=["behaviours"])

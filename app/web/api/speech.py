@@ -10,10 +10,10 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Depends, HTTPException, Query, Request, Response
 from fastapi.concurrency import run_in_threadpool
 
-from app.api.deps import Operator, runtime
-from app.robot_calls import ask
 from app.runtime import Runtime
 from app.sessions.audio_store import save_recording
+from app.web.api.deps import Operator, runtime
+from app.web.robot_calls import ask
 from robot.interface import EStop
 from robot.model.world import generate_world
 from robot.planning.world_context import WorldContext

@@ -1,6 +1,6 @@
 """The live 3D mirror: a viser server that shows the robot and its world as the worker reports them. viser has no
 login, so it listens on loopback only, on a port of the system's choosing; browsers reach it through its gate
-(`app.scene_gate`, on the port the settings name), which checks their login.
+(`app.viz.scene_gate`, on the port the settings name), which checks their login.
 
 The mirror only reads `RobotState` snapshots (qpos) and the model from `RobotDescription`; it recomputes body
 poses in its own MjData, so it never touches the worker's simulation. mjviser builds the scene from the model.
@@ -21,10 +21,10 @@ import viser
 from mjviser.scene import ViserMujocoScene
 
 from app.auth.scene_tokens import SceneGrant
-from app.click_goal import HINT as CLICK_HINT
-from app.click_goal import enable_clicks
-from app.perception_overlay import NavigationOverlay, PerceptionOverlay
-from app.scene_gate import ClickHandler, SceneGate
+from app.viz.click_goal import HINT as CLICK_HINT
+from app.viz.click_goal import enable_clicks
+from app.viz.perception_overlay import NavigationOverlay, PerceptionOverlay
+from app.viz.scene_gate import ClickHandler, SceneGate
 from robot.interface import LocomotionState, RobotPort
 from robot.model import humanoid_v1
 

@@ -7,13 +7,13 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Depends, HTTPException, Request, Response
 from pydantic import BaseModel, ConfigDict, Field
 
-from app.api.deps import principal, runtime
 from app.auth.access import COOKIE_NAME, LOGIN_TTL_S, LoginThrottled
 from app.auth.control import ControlHeld
 from app.auth.roles import Principal, Role
 from app.auth.scene_tokens import login_id
-from app.robot_calls import ask
 from app.runtime import Runtime
+from app.web.api.deps import principal, runtime
+from app.web.robot_calls import ask
 from robot.interface import PauseBehaviour
 
 router = APIRouter(prefix="/api", tags=["access"])

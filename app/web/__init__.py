@@ -1,0 +1,1 @@
+"""The web server: the page, the API, the WebSockets and the feeds pages are sent."""
