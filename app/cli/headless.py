@@ -5,6 +5,8 @@ from __future__ import annotations
 import time
 from typing import Any
 
+from sqlalchemy import Engine
+
 from app.sessions.audio_store import save_recording
 from app.sessions.db import make_engine, make_session_factory, upgrade_to_head
 from app.sessions.maintenance import close_interrupted_sessions
@@ -17,24 +19,11 @@ from robot.worker import RobotWorker
 SETTLE_SIM_S = 0.5  # let the robot settle on its feet before the command, as an operator would
 
 
-def run_command(
-    text: str,
-    seed: int,
-    settings: Settings,
-    timeout_s: float = 300.0,
-    heard: tuple[dict[str, Any], bytes] | None = None,
-) -> dict[str, Any]:
-    """Plan and execute `text` in a fresh simulation; returns the result the CLI prints. `heard`: the transcript
-    `text` came from and its recording (WAV), kept with the session."""
+def open_run_session(settings: Settings, worker: RobotWorker, seed: int) -> tuple[SessionRecorder, Engine]:
+    """A headless run's session: the database brought to its newest schema, sessions a crash left open closed, and
+    a new session recording `worker`. The caller closes the recorder, then disposes of the engine."""
     upgrade_to_head(settings.database_url)
     engine = make_engine(settings.database_url)
-    worker = RobotWorker(
-        generate_world(seed),
-        realtime=False,
-        control_hz=settings.control_hz,
-        planning=settings.planner_config(),
-        max_auto_replans=settings.max_auto_replans,
-    )
     factory = make_session_factory(engine)
     close_interrupted_sessions(factory)
     recorder = SessionRecorder(
@@ -46,6 +35,26 @@ def run_command(
         camera_hz=settings.record_camera_hz,
         camera_width=settings.record_camera_width,
     )
+    return recorder, engine
+
+
+def run_command(
+    text: str,
+    seed: int,
+    settings: Settings,
+    timeout_s: float = 300.0,
+    heard: tuple[dict[str, Any], bytes] | None = None,
+) -> dict[str, Any]:
+    """Plan and execute `text` in a fresh simulation; returns the result the CLI prints. `heard`: the transcript
+    `text` came from and its recording (WAV), kept with the session."""
+    worker = RobotWorker(
+        generate_world(seed),
+        realtime=False,
+        control_hz=settings.control_hz,
+        planning=settings.planner_config(),
+        max_auto_replans=settings.max_auto_replans,
+    )
+    recorder, engine = open_run_session(settings, worker, seed)
     started = time.perf_counter()
     worker.start()
     try:

@@ -7,17 +7,13 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from app.sessions.db import make_engine, make_session_factory, upgrade_to_head
-from app.sessions.maintenance import close_interrupted_sessions
-from app.sessions.recorder import SessionRecorder
+from app.cli.headless import SETTLE_SIM_S, open_run_session
 from app.settings import Settings
 from app.web.serialize import behaviour_info_json
 from robot.behaviours.registry import discover
 from robot.interface import BehaviourState, RobotState, StartBehaviour
 from robot.model.world import generate_world
 from robot.worker import RobotWorker
-
-SETTLE_SIM_S = 0.5  # the robot settles on its feet first, as an operator would wait
 
 
 def list_behaviours() -> dict[str, Any]:
@@ -49,22 +45,10 @@ def run_behaviour(
     """Run behaviour `name` to its end (or `timeout_s` of wall time) in a fresh world `seed`; the result the CLI
     prints. `during`: called with each state while it runs (a bench drops obstacles); `worker`: a robot to run it
     on (default: a new one on world `seed`)."""
-    upgrade_to_head(settings.database_url)
-    engine = make_engine(settings.database_url)
     worker = worker or RobotWorker(
         generate_world(seed), realtime=False, control_hz=settings.control_hz, planning=settings.planner_config()
     )
-    factory = make_session_factory(engine)
-    close_interrupted_sessions(factory)
-    recorder = SessionRecorder(
-        factory,
-        worker,
-        kind="run",
-        seed=seed,
-        audio_dir=settings.audio_dir,
-        camera_hz=settings.record_camera_hz,
-        camera_width=settings.record_camera_width,
-    )
+    recorder, engine = open_run_session(settings, worker, seed)
     started = time.perf_counter()
     worker.start()
     try:

@@ -8,9 +8,13 @@ import dataclasses
 import json
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from app.deploy.unit import DEFAULT_DATA_DIR, SERVICE_NAME, ServiceSpec, spec_from_settings
 from app.settings import Settings
+
+if TYPE_CHECKING:
+    from app.deploy.install import Action
 
 
 def _spec(args: argparse.Namespace, settings: Settings) -> tuple[ServiceSpec, Settings]:
@@ -50,7 +54,7 @@ def _show(actions: list, root: Path) -> None:
 
 
 def _install(args: argparse.Namespace, settings: Settings) -> int:
-    from app.deploy.install import InstallError, apply, plan_install, unreachable_paths
+    from app.deploy.install import plan_install, unreachable_paths
     from app.deploy.unit import render_env_file
 
     if _refuse_unless_root(args):
@@ -73,11 +77,7 @@ def _install(args: argparse.Namespace, settings: Settings) -> int:
     if args.dry_run:
         _show(actions, root)
         return 0
-    try:
-        for line in apply(actions, root):
-            print(line)
-    except InstallError as exc:
-        print(f"humanoid service install: {exc}", file=sys.stderr)
+    if not _apply(actions, root, "install"):
         return 1
     print(
         f"installed {spec.unit_name}: `journalctl -u {spec.name} -f` shows its log, "
@@ -86,8 +86,21 @@ def _install(args: argparse.Namespace, settings: Settings) -> int:
     return 0
 
 
+def _apply(actions: list[Action], root: Path, verb: str) -> bool:
+    """Carry out a plan of file actions, printing each; False (said on stderr) if one failed."""
+    from app.deploy.install import InstallError, apply
+
+    try:
+        for line in apply(actions, root):
+            print(line)
+    except InstallError as exc:
+        print(f"humanoid service {verb}: {exc}", file=sys.stderr)
+        return False
+    return True
+
+
 def _uninstall(args: argparse.Namespace, settings: Settings) -> int:
-    from app.deploy.install import InstallError, apply, plan_uninstall
+    from app.deploy.install import plan_uninstall
     from app.deploy.unit import ENV_FILE
 
     if _refuse_unless_root(args):
@@ -98,11 +111,7 @@ def _uninstall(args: argparse.Namespace, settings: Settings) -> int:
     if args.dry_run:
         _show(actions, root)
         return 0
-    try:
-        for line in apply(actions, root):
-            print(line)
-    except InstallError as exc:
-        print(f"humanoid service uninstall: {exc}", file=sys.stderr)
+    if not _apply(actions, root, "uninstall"):
         return 1
     print(
         f"kept: the data in {spec.data_dir}, {ENV_FILE} and the user {spec.user} (to remove them too: "

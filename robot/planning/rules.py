@@ -24,6 +24,7 @@ from robot.planning.language.intents import Step as Request
 from robot.planning.language.intents import elliptic_step, read_step
 from robot.planning.language.lexicon import NUMBER_WORDS, OBJECT_PRONOUNS, PLACE_PRONOUNS
 from robot.planning.language.names import QUESTION_START, WorldNames
+from robot.planning.language.tokens import tokenize
 from robot.planning.planner import ClarificationNeeded, PlanningError
 
 __all__ = ["NUMBER_WORDS", "RulesPlanner"]
@@ -42,7 +43,41 @@ class RulesPlanner:
         raw = text.strip()
         if not raw:
             raise PlanningError("empty command")
-        return self._answer(raw, context) or self._plan(raw, context)
+        answer = self._answer(raw, context)
+        if answer is not None:
+            return answer
+        try:
+            return self._plan(raw, context)
+        except ClarificationNeeded:
+            raise
+        except PlanningError:
+            recovered = self._after_garbled_frame(raw, context)
+            if recovered is None:
+                raise
+            return recovered
+
+    def _after_garbled_frame(self, raw: str, context: PlanningContext) -> Plan | None:
+        """ "Cut your please bring the red mug", "What do you mind picking up the bottle": a recogniser often garbles
+        the polite frame a request starts with. Read from the first word on which the rest is a request, if the
+        words skipped are few, end in a word of such a frame, and say nothing the plan would leave out: no
+        negation, no second step, no name in the world."""
+        words = [t for t in tokenize(raw) if not t.is_break]
+        world_words = WorldNames(context.world).words()
+        for start in range(1, min(MAX_GARBLED_FRAME_WORDS, len(words) - 1) + 1):
+            skipped = {w.text for w in words[: start + 1]}  # and the first word read: "..., then bring"
+            if skipped & (_NOT_A_FRAME | world_words):
+                return None
+            if words[start - 1].text not in _FRAME_WORDS:
+                continue  # a frame ends the words before the request: "could you" "please" "do you mind"
+            rest = raw[words[start].start :]
+            requests = _read(rest)
+            if not requests or requests[0].action in ("topic", "chatter", "nothing"):
+                continue
+            try:
+                return self._plan(rest, context)
+            except PlanningError:
+                continue
+        return None
 
     def _plan(self, raw: str, context: PlanningContext, chosen: frozenset[str] = frozenset()) -> Plan:
         requests = _read(raw)
@@ -106,6 +141,14 @@ def _read(raw: str) -> list[Request]:
         requests.append(request)
     return requests
 
+
+# a garbled polite frame before a request ("cut your please" for "could you please") is at most this long and
+# ends in one of its words; a word that changes or adds to the request means it is not a frame
+MAX_GARBLED_FRAME_WORDS = 4
+_FRAME_WORDS = frozenset(("you", "your", "please", "mind", "could", "would", "can", "will", "kindly"))
+_NOT_A_FRAME = frozenset(
+    ("not", "no", "never", "nor", "without", "instead", "and", "then", "after", "before", "but", "or", "stop")
+)
 
 # "I'm thirsty, ...", "it's late, ...": said about things, not asked of the robot
 _STATEMENT = re.compile(

@@ -10,8 +10,6 @@ that fails (unplugged) is said, and reopened every second.
 
 from __future__ import annotations
 
-import logging
-import threading
 import time
 from collections.abc import Callable
 
@@ -19,15 +17,13 @@ import serial
 
 from robot.sensors import bno055_protocol as bno
 from robot.sensors.imu import ImuSample
-
-log = logging.getLogger(__name__)
+from robot.sensors.reader_thread import ReaderThread, SourceFailed
 
 REPLY_TIMEOUT_S = 0.05
-REOPEN_AFTER_S = 1.0
 RETRIES = 3
 
 
-class Bno055Error(RuntimeError):
+class Bno055Error(SourceFailed):
     pass
 
 
@@ -69,10 +65,11 @@ class Bno055Link:
         self.port.reset_input_buffer()
 
 
-class Bno055Imu:
+class Bno055Imu(ReaderThread[ImuSample, serial.SerialBase]):
     """`port`: the serial device (or a pyserial URL); `clock`: the body's clock, to stamp samples."""
 
     name = "BNO055 IMU"
+    thread_name = "bno055"
 
     def __init__(
         self,
@@ -80,61 +77,26 @@ class Bno055Imu:
         clock: Callable[[], float] = time.monotonic,
         open_port: Callable[[str], serial.SerialBase] | None = None,
     ) -> None:
+        super().__init__()
         self.port_name = port
         self.clock = clock
         self._open_port = open_port or (
             lambda name: serial.serial_for_url(name, baudrate=bno.BAUDRATE, timeout=REPLY_TIMEOUT_S)
         )
-        self._lock = threading.Lock()
-        self._latest: ImuSample | None = None
-        self._problem = "not started"
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
         self.samples = 0
         self.corrupt_replies = 0
 
-    def start(self) -> None:
-        self._stop.clear()
-        self._thread = threading.Thread(target=self._run, name="bno055", daemon=True)
-        self._thread.start()
+    def _source_label(self) -> str:
+        return self.port_name
 
-    def stop(self) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=2)
-            self._thread = None
+    def _open(self) -> serial.SerialBase:
+        return self._open_port(self.port_name)
 
-    def latest(self) -> ImuSample | None:
-        with self._lock:
-            return self._latest
+    def _close(self, source: serial.SerialBase) -> None:
+        source.close()
 
-    def problem(self) -> str:
-        with self._lock:
-            return self._problem
-
-    def _say(self, problem: str) -> None:
-        with self._lock:
-            if problem and problem != self._problem:
-                log.error("BNO055 on %s: %s", self.port_name, problem)
-            self._problem = problem
-
-    def _run(self) -> None:
-        while not self._stop.is_set():
-            try:
-                port = self._open_port(self.port_name)
-            except (serial.SerialException, OSError) as exc:
-                self._say(f"cannot open {self.port_name}: {exc}")
-                self._stop.wait(REOPEN_AFTER_S)
-                continue
-            try:
-                self._sample(Bno055Link(port))
-            except (serial.SerialException, OSError) as exc:
-                self._say(f"{self.port_name} failed: {exc}")
-            except Bno055Error as exc:
-                self._say(str(exc))
-            finally:
-                port.close()
-            self._stop.wait(REOPEN_AFTER_S)
+    def _serve(self, source: serial.SerialBase) -> None:
+        self._sample(Bno055Link(source))
 
     def _sample(self, link: Bno055Link) -> None:
         chip = link.read(bno.CHIP_ID, 1)[0]
@@ -143,12 +105,9 @@ class Bno055Imu:
         link.write(bno.OPR_MODE, bytes([bno.MODE_CONFIG]))
         link.write(bno.UNIT_SEL, bytes([0]))  # m/s^2, deg/s, degrees
         link.write(bno.OPR_MODE, bytes([bno.MODE_NDOF]))
-        while not self._stop.is_set():
+        while not self.stopping:
             block = link.read(*bno.SAMPLE_BLOCK)
             quat, gyro, accel = bno.decode_sample(block)
-            sample = ImuSample(quat, gyro, accel, self.clock())
-            with self._lock:
-                self._latest = sample
-                self._problem = ""
-                self.samples += 1
-                self.corrupt_replies = link.corrupt_replies
+            self.samples += 1
+            self.corrupt_replies = link.corrupt_replies
+            self._publish(ImuSample(quat, gyro, accel, self.clock()))

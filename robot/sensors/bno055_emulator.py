@@ -7,52 +7,30 @@ from __future__ import annotations
 import contextlib
 import os
 import select
-import threading
-import tty
 
 import numpy as np
 
 from robot.sensors import bno055_protocol as bno
+from robot.sensors.pty_device import PtyDevice
 
 
-class Bno055Emulator:
+class Bno055Emulator(PtyDevice):
+    thread_name = "bno055-emulator"
+
     def __init__(self) -> None:
+        super().__init__()
         self.registers = bytearray(0x80)
         self.registers[bno.CHIP_ID] = bno.CHIP_ID_VALUE
         self.corrupt_replies = 0
         self.silent = False
         self.commands = 0
-        self._lock = threading.Lock()
-        self._master, self._slave = os.openpty()
-        tty.setraw(self._slave)
-        self.port_name = os.ttyname(self._slave)
         self._buffer = bytearray()
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, name="bno055-emulator", daemon=True)
         self.sense(np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3), np.array([0.0, 0.0, 9.81]))
-
-    def __enter__(self) -> Bno055Emulator:
-        self._thread.start()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self._stop.set()
-        self._thread.join(timeout=2)
-        for fd in (self._master, self._slave):
-            with contextlib.suppress(OSError):
-                os.close(fd)
 
     def sense(self, quat: np.ndarray, gyro: np.ndarray, accel: np.ndarray) -> None:
         with self._lock:
             start, length = bno.SAMPLE_BLOCK
             self.registers[start : start + length] = bno.encode_sample(quat, gyro, accel)
-
-    def unplug(self) -> None:
-        """The cable pulled: the host's port fails (its pseudo-terminal's other end is gone)."""
-        self._stop.set()
-        self._thread.join(timeout=2)
-        with contextlib.suppress(OSError):
-            os.close(self._master)
 
     def _run(self) -> None:
         while not self._stop.is_set():

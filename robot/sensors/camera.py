@@ -8,8 +8,6 @@ What goes wrong is said (`problem`): a source that cannot be opened, a camera th
 
 from __future__ import annotations
 
-import logging
-import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -18,11 +16,9 @@ import cv2
 import numpy as np
 
 from robot.perception.geometry import PinholeIntrinsics
-
-log = logging.getLogger(__name__)
+from robot.sensors.reader_thread import ReaderThread
 
 STALL_AFTER_S = 1.0
-REOPEN_AFTER_S = 1.0
 FAILED_READS_BEFORE_REOPEN = 10
 DEFAULT_FOVY_DEG = 45.0
 OPEN_TIMEOUT_MS = 5000
@@ -46,94 +42,41 @@ def capture_source(text: str) -> int | str:
     return int(text) if text.isdigit() else text
 
 
-class FrameGrabber:
+class FrameGrabber(ReaderThread[CameraImage, None]):
     """The newest frame of a source read on its own thread, and what went wrong. A subclass says how to open the
-    source and read one frame (`_open`, `_read`, `_close`)."""
+    source and read one frame (`_open`, `_read`, `_close`); a read that fails ten times in a row reopens it."""
 
     name = "camera"
+    thread_name = "camera"
 
     def __init__(self, clock: Callable[[], float] = time.monotonic, stall_after_s: float = STALL_AFTER_S) -> None:
+        super().__init__()
         self.clock = clock
-        self.stall_after_s = stall_after_s
-        self._lock = threading.Lock()
-        self._latest: CameraImage | None = None
-        self._last_frame_s: float | None = None
-        self._problem = "not started"
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
+        self.silent_after_s = stall_after_s
         self.frames = 0
 
-    def start(self) -> None:
-        self._stop.clear()
-        self._thread = threading.Thread(target=self._run, name=self.name, daemon=True)
-        self._thread.start()
+    def _silence(self, silent_s: float) -> str:
+        return f"stalled: no new frame for {silent_s:.1f} s"
 
-    def stop(self) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=3)
-            self._thread = None
-
-    def latest(self) -> CameraImage | None:
-        with self._lock:
-            return self._latest
-
-    def problem(self) -> str:
-        """Why there is no fresh frame now ("" while they come)."""
-        with self._lock:
-            if self._problem:
-                return self._problem
-            if self._last_frame_s is not None:
-                silent = time.monotonic() - self._last_frame_s
-                if silent > self.stall_after_s:
-                    return f"stalled: no new frame for {silent:.1f} s"
-            return ""
-
-    def _say(self, problem: str) -> None:
-        with self._lock:
-            if problem != self._problem:
-                log.error("%s: %s", self.name, problem)
-            self._problem = problem
-
-    def _run(self) -> None:
-        while not self._stop.is_set():
+    def _serve(self, source: None) -> None:
+        failures = 0
+        while not self.stopping and failures < FAILED_READS_BEFORE_REOPEN:
             try:
-                self._open()
+                frame = self._read()
             except Exception as exc:  # a vendor SDK's own errors, too
-                self._say(f"cannot open: {exc}")
-                self._stop.wait(REOPEN_AFTER_S)
+                self._say(f"read failed: {exc}")
+                frame = None
+            if frame is None:
+                failures += 1
                 continue
-            with self._lock:
-                self._problem = ""
             failures = 0
-            while not self._stop.is_set() and failures < FAILED_READS_BEFORE_REOPEN:
-                try:
-                    frame = self._read()
-                except Exception as exc:
-                    self._say(f"read failed: {exc}")
-                    frame = None
-                if frame is None:
-                    failures += 1
-                    continue
-                failures = 0
-                rgb, depth, intrinsics = frame
-                with self._lock:
-                    self.frames += 1
-                    self._latest = CameraImage(rgb, depth, intrinsics, self.clock(), self.frames)
-                    self._last_frame_s = time.monotonic()
-                    self._problem = ""
-            self._close()
-            if not self._stop.is_set():
-                self._say("the source stopped giving frames: reopening")
-                self._stop.wait(REOPEN_AFTER_S)
-
-    def _open(self) -> None:
-        raise NotImplementedError
+            rgb, depth, intrinsics = frame
+            self.frames += 1
+            self._publish(CameraImage(rgb, depth, intrinsics, self.clock(), self.frames))
+        if not self.stopping:
+            self._say("the source stopped giving frames: reopening")
 
     def _read(self) -> tuple[np.ndarray, np.ndarray | None, PinholeIntrinsics] | None:
-        raise NotImplementedError
-
-    def _close(self) -> None:
         raise NotImplementedError
 
 
@@ -182,7 +125,7 @@ class UvcCamera(FrameGrabber):
         intrinsics = PinholeIntrinsics.from_vertical_fov(width, height, self.fovy_deg)
         return cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB), None, intrinsics
 
-    def _close(self) -> None:
+    def _close(self, source: None) -> None:
         if self._capture is not None:
             self._capture.release()
             self._capture = None

@@ -4,53 +4,31 @@ with a wrong CRC (`corrupt_packets`), the sensor going quiet (`quiet`), the cabl
 
 from __future__ import annotations
 
-import contextlib
 import os
-import threading
 import time
-import tty
 
 from robot.perception.lidar import LaserScan
 from robot.sensors.ld06_protocol import encode, packets_from_scan
+from robot.sensors.pty_device import PtyDevice
 
 TURN_S = 0.1
 
 
-class Ld06Emulator:
+class Ld06Emulator(PtyDevice):
+    thread_name = "ld06-emulator"
+
     def __init__(self, scan: LaserScan, mount_yaw_rad: float = 0.0) -> None:
+        super().__init__()
         self.mount_yaw = mount_yaw_rad
         self.corrupt_packets = 0
         self.quiet = False
         self.turns = 0
-        self._lock = threading.Lock()
         self._packets = [encode(p) for p in packets_from_scan(scan, mount_yaw_rad=mount_yaw_rad)]
-        self._master, self._slave = os.openpty()
-        tty.setraw(self._slave)
-        self.port_name = os.ttyname(self._slave)
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, name="ld06-emulator", daemon=True)
-
-    def __enter__(self) -> Ld06Emulator:
-        self._thread.start()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self._stop.set()
-        self._thread.join(timeout=2)
-        for fd in (self._master, self._slave):
-            with contextlib.suppress(OSError):
-                os.close(fd)
 
     def set_scan(self, scan: LaserScan) -> None:
         packets = [encode(p) for p in packets_from_scan(scan, mount_yaw_rad=self.mount_yaw)]
         with self._lock:
             self._packets = packets
-
-    def unplug(self) -> None:
-        self._stop.set()
-        self._thread.join(timeout=2)
-        with contextlib.suppress(OSError):
-            os.close(self._master)
 
     def _run(self) -> None:
         next_turn = time.monotonic()

@@ -90,7 +90,7 @@ class RealSenseCamera(FrameGrabber):
         metres = np.asanyarray(depth.get_data()).astype(np.float32) * self.source.depth_scale
         return rgb, metres, intrinsics_of(color.profile)
 
-    def _close(self) -> None:
+    def _close(self, source: None) -> None:
         if self._started:
             self.source.stop()
             self._started = False

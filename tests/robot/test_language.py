@@ -312,3 +312,35 @@ def test_every_kind_of_sentence_the_speech_grammar_hears_is_planned(world) -> No
         except PlanningError as exc:
             unplanned.append((sentence, str(exc)[:80]))
     assert unplanned == []
+
+
+# --- a polite frame the recogniser garbled ---------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "heard",
+    [
+        "Cut your please bring me the green apple.",  # "could you please ..."
+        "Good, you please bring me the green apple.",
+        "Wood you mind fetching the green apple?",  # "would you mind ..."
+        "What do you mind getting me the green apple",
+    ],
+)
+def test_a_request_after_a_garbled_polite_frame_is_still_planned(heard: str, world) -> None:
+    assert plan(heard, world)[:3] == FETCH_APPLE
+
+
+@pytest.mark.parametrize(
+    "said",
+    [
+        "Don't you please bring me the green apple",  # a negation is never skipped
+        "could you not bring me the green apple",
+        "can you dance, then bring me the green apple",  # an ability the robot lacks, then a second step
+        "can you juggle the red mug please bring me the green apple",  # names a thing: not a frame
+        "can you cook dinner please bring me the green apple",  # the words before the request end in no frame word
+        "jump, bring me the green apple",
+    ],
+)
+def test_words_before_a_request_that_change_or_add_to_it_are_not_skipped(said: str, world) -> None:
+    with pytest.raises(PlanningError):
+        plan(said, world)

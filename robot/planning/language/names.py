@@ -200,6 +200,10 @@ class WorldNames:
                 continue
         return None
 
+    def words(self) -> frozenset[str]:
+        """Every word of every name the world's objects and places go by ("red", "mug", "kitchen", ...)."""
+        return frozenset(w for table in (self._object_names, self._place_names) for said in table for w in said.split())
+
     def target(self, phrase: str) -> str:
         """Where to walk to: a place, or the place where an object is believed to be ("go to the mug")."""
         try:
