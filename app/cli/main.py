@@ -327,7 +327,7 @@ def _behaviours_run(args: argparse.Namespace, settings: Settings) -> int:
 
 
 def _bench(args: argparse.Namespace, settings: Settings) -> int:
-    from app.bench import run_suite
+    from bench import run_suite
 
     return run_suite(args.suite, args)
 
@@ -548,6 +548,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     bench.add_argument(
         "--no-robot-microphone", action="store_true", help="speech: leave out the robot microphone's stop timing"
+    )
+    bench.add_argument(
+        "--quick",
+        action="store_true",
+        help="voice, speech: a few utterances, one voice, clean only (shows the bench works; its figures mean little)",
     )
     bench.set_defaults(func=_bench)
     return parser

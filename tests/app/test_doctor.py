@@ -19,11 +19,11 @@ from pathlib import Path
 
 import pytest
 
-from app.bench.server import free_port
 from app.deploy.doctor import devices, services, system
 from app.deploy.doctor.report import Level, Machine, run_checks
 from app.sessions.db import upgrade_to_head
 from app.settings import Settings
+from harness.server import free_port
 
 HUMANOID = Path(sys.executable).parent / "humanoid"
 

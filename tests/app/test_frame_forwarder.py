@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import random
 
-from app.bench.frame_forwarder import ETH_P_ARP, DelayLine, Impairment
+from harness.frame_forwarder import ETH_P_ARP, DelayLine, Impairment
 
 DELAY = Impairment(delay_s=0.020, jitter_s=0.005, loss=0.0)
 

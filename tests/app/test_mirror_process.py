@@ -14,8 +14,8 @@ import websockets
 
 from app.auth.roles import Principal, Role
 from app.auth.scene_tokens import SceneGrant, SceneTokens
-from app.bench.server import free_port
 from app.viz.mirror_process import MIRROR_NICE, MirrorProcess
+from harness.server import free_port
 from robot.interface import StopTeleop, Teleop
 from robot.process import WorkerProcess
 from tests.app.test_api import wait_until

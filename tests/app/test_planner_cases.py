@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from app.bench.planner_cases import CASES, Case, context_for, plan_matches
+from harness.planner_cases import CASES, Case, context_for, plan_matches
 from robot.model.world import generate_world
 from robot.planning.pipeline import PlannerConfig, build_pipeline
 

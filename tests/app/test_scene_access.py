@@ -17,11 +17,11 @@ from viser._messages import ScenePointerMessage, ViewerCameraMessage
 
 from app.auth.roles import Principal, Role
 from app.auth.scene_tokens import SceneTokens
-from app.bench.server import free_port
 from app.runtime import Runtime
 from app.viz.scene_gate import admit, build_request_head, parse_request_head, pointer_click, unmask
 from app.web.api.scene import other_site
 from app.web.main import create_app
+from harness.server import free_port
 from tests.app.test_access import PASSWORD, user_store
 from tests.app.test_api import wait_until
 from tests.support.scene_viewer import scene_bytes, shift_click, view_url

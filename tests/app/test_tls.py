@@ -13,8 +13,8 @@ from cryptography import x509
 from cryptography.x509 import DNSName, IPAddress
 from cryptography.x509.verification import PolicyBuilder, Store, VerificationError
 
-from app.bench.server import ServerProcess
 from app.web.tls import ensure_certificate
+from harness.server import ServerProcess
 
 
 def _alternative_names(path: str) -> set[str]:

@@ -9,9 +9,9 @@ import pytest
 
 from app.auth.roles import Role
 from app.auth.store import UserStore
-from app.bench.browser import launch_chromium, wait_for_scene_render
-from app.bench.server import ServerProcess
 from app.sessions.db import make_engine, make_session_factory, upgrade_to_head
+from harness.browser import launch_chromium, wait_for_scene_render
+from harness.server import ServerProcess
 from tests.support.scene_viewer import run_apart, shift_click, view_url
 
 pytestmark = pytest.mark.slow

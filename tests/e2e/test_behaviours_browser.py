@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import pytest
 
-from app.bench.browser import launch_chromium
-from app.bench.server import ServerProcess
+from harness.browser import launch_chromium
+from harness.server import ServerProcess
 
 pytestmark = pytest.mark.slow
 

@@ -7,8 +7,8 @@ import re
 import httpx
 import pytest
 
-from app.bench.browser import chromium_path, launch_chromium, wait_for_scene_render
-from app.bench.server import ServerProcess
+from harness.browser import chromium_path, launch_chromium, wait_for_scene_render
+from harness.server import ServerProcess
 
 pytestmark = pytest.mark.slow
 

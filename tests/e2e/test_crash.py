@@ -8,7 +8,7 @@ import time
 import httpx
 import pytest
 
-from app.bench.server import ServerProcess
+from harness.server import ServerProcess
 
 pytestmark = pytest.mark.slow
 

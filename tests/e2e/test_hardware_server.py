@@ -15,12 +15,12 @@ import httpx
 import psutil
 import pytest
 
-from app.bench.browser import launch_chromium
-from app.bench.server import ServerProcess
 from app.deploy.unit import STOP_TIMEOUT_S
 from app.sessions.db import make_engine, make_session_factory
 from app.sessions.models import SessionRow
 from app.viz.mirror_process import MIRROR_NICE
+from harness.browser import launch_chromium
+from harness.server import ServerProcess
 from robot.hardware import control_table as ct
 from robot.hardware.bus_emulator import BusEmulator
 from robot.hardware.config import default_config, save_config

@@ -10,8 +10,8 @@ from collections.abc import Iterator
 
 import pytest
 
-from app.bench.impaired_link import ImpairedLink, RigUnavailable, unavailable_reason
-from app.bench.network import Ends, cut_while_driving, estop_presses, round_trips, served_across
+from harness.impaired_link import ImpairedLink, RigUnavailable, unavailable_reason
+from harness.network_rig import Ends, cut_while_driving, estop_presses, round_trips, served_across
 
 pytestmark = pytest.mark.slow
 

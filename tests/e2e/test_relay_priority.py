@@ -8,8 +8,8 @@ import os
 import psutil
 import pytest
 
-from app.bench.server import ServerProcess
 from app.web.relay_priority import RELAY_FIFO_PRIORITY, thread_scheduling
+from harness.server import ServerProcess
 
 pytestmark = pytest.mark.slow
 

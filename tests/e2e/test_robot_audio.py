@@ -20,8 +20,8 @@ import httpx
 import numpy as np
 import pytest
 
-from app.bench.browser import launch_chromium
-from app.bench.server import ServerProcess
+from harness.browser import launch_chromium
+from harness.server import ServerProcess
 from robot.speech.tts import synthesize_audio
 
 pytestmark = [

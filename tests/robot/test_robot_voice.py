@@ -296,16 +296,6 @@ def test_spooled_recordings_move_into_the_session_folder(tmp_path: Path) -> None
     assert keep_recording(tmp_path / "audio", 7, spooled) is None  # gone: nothing to keep, no error
 
 
-def test_the_voice_bench_times_the_robot_microphone_from_the_end_of_speech() -> None:
-    from app.bench.voice import run_robot_microphone
-
-    result = run_robot_microphone(("go to the charging dock", "wait for three seconds"))
-    assert result["heard"] == 2 and result["heard_right"] == 2, result
-    latency = result["end_of_speech_to_plan_ms"]
-    # the voice-activity window (0.2 s) is part of it: never faster than that, and well under two seconds
-    assert 150 < latency["p50"] <= latency["max"] < 2000, result
-
-
 def test_a_recogniser_that_dies_is_restarted_and_the_robot_listens_on(voice_rig) -> None:
     bus, commands, make = voice_rig
     voice = make(_stream(1.0, _speech("hello there"), 1.5, _speech("go to the charging dock"), 1.0))
@@ -314,27 +304,3 @@ def test_a_recogniser_that_dies_is_restarted_and_the_robot_listens_on(voice_rig)
     assert failed.level == Level.WARN and "restarting it" in failed.message
     assert _events(bus, "speech/heard", 1)[0].data["text"] == "go to the charging dock"
     assert commands == ["go to the charging dock"]
-
-
-def test_the_speech_bench_times_a_spoken_stop_on_the_robot_microphone() -> None:
-    from app.bench.spoken import run_robot_microphone_stops
-
-    result = run_robot_microphone_stops(("stop", "freeze"), engine="pocketsphinx")
-    assert result["latched"] == 2 and result["missed"] == [], result
-    latency = result["end_of_word_to_estop_ms"]
-    # the voice-activity window (0.2 s) is part of it: never faster than that (its bar is the bench's business)
-    assert 150 < latency["p50"] <= latency["max"], result
-
-
-def test_the_speech_bench_reports_word_errors_plans_and_stops_per_engine() -> None:
-    from app.bench.spoken import run_set, summarise
-    from app.bench.spoken_cases import DEV, SpokenSet
-
-    tiny = SpokenSet("dev", DEV.voices[:1], DEV.commands[:1], DEV.stops[:1], DEV.with_stop[:1])
-    summary = summarise(run_set(tiny, ("whisper", "pocketsphinx"), snrs=(None,)))
-    for engine in ("whisper", "pocketsphinx"):
-        figures = summary["dev"][engine]
-        assert figures["clean"]["utterances"] == 2 and figures["clean"]["wer"] is not None
-        assert figures["stop"]["stop_utterances"] == 1 and figures["stop"]["ordinary_commands"] == 2
-        assert figures["confidence"]["threshold"] == 0.7
-    assert summary["dev"]["whisper"]["stop"]["false_stops"] == 0  # "go to the dock and stop there" is no stop

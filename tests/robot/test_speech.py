@@ -10,7 +10,7 @@ import wave
 import numpy as np
 import pytest
 
-from app.bench.voice import run_trials, spoken_cases, summarise, word_errors
+from harness.speech_trials import run_trials, spoken_cases, summarise, word_errors
 from robot.planning.world_context import WorldContext
 from robot.speech.asr import AUTO_RUN_CONFIDENCE
 from robot.speech.audio import RATE, Audio, AudioError, add_noise, from_samples, read_wav_bytes

@@ -123,11 +123,12 @@ def long_classes(modules: dict[str, ast.Module], limit: int = MAX_CLASS_LINES) -
     return found
 
 
-def app_imports(modules: dict[str, ast.Module]) -> list[str]:
+def app_imports(modules: dict[str, ast.Module], package: str = "app") -> list[str]:
+    """Every import of `package` (or one of its modules) in `modules`, with where it is."""
     found = []
     for name, tree in modules.items():
         for target, line in imported_modules(tree, name, False):
-            if target == "app" or target.startswith("app."):
+            if target == package or target.startswith(f"{package}."):
                 found.append(f"{name}:{line} imports {target}")
     return found
 
@@ -176,6 +177,13 @@ def test_robot_modules_import_each_other_without_a_cycle(modules) -> None:
 
 def test_robot_never_imports_the_app(modules) -> None:
     found = app_imports(modules)
+    assert found == [], "\n".join(found)
+
+
+def test_the_tests_and_the_rigs_they_share_with_the_benches_never_import_the_benches() -> None:
+    """The benches measure; the tests check, with the rigs in `harness/` (a bench may change without a test)."""
+    found = [*app_imports(parse_package(ROOT, "tests"), "bench"), *app_imports(parse_package(ROOT, "harness"), "bench")]
+    found += app_imports(parse_package(ROOT, "harness"), "tests")
     assert found == [], "\n".join(found)
 
 

@@ -2,12 +2,12 @@
 one-way delay with jitter (in order: a frame never overtakes the one before it, as on a wire), some are lost at
 random, and the whole link can be cut and restored. This kernel has no netem qdisc, so the delay and the loss are
 made here; the rate limit is the kernel's own `tbf` qdisc on the interface the frames leave by
-(see `app.bench.impaired_link`, which runs this module in a network namespace of its own).
+(see `harness.impaired_link`, which runs this module in a network namespace of its own).
 
 Times are wall-clock (each frame's delay runs from the kernel's stamp of its arrival); the stats say how late,
 at worst, frames left after their time (how faithful the link was on a busy machine).
 
-Run as `python -m app.bench.frame_forwarder LEFT RIGHT [--delay-ms ..]` (root: raw sockets). It prints
+Run as `python -m harness.frame_forwarder LEFT RIGHT [--delay-ms ..]` (root: raw sockets). It prints
 {"ready": true} once both interfaces are open, then takes one command a line on stdin and answers each with one
 JSON line on stdout: "cut", "restore" (each answered with the wall time it took effect), "stats" (frames and
 bytes each way), "quit".

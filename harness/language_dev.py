@@ -5,7 +5,7 @@ Add a case here when a wording fails, never to the held-out set. Labels follow `
 
 from __future__ import annotations
 
-from app.bench.language_cases import (
+from harness.language_cases import (
     APPLE,
     BOTTLE,
     CLARIFY,

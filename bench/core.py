@@ -19,24 +19,12 @@ import time
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from app.bench.browser import launch_chromium, wait_for_scene_render
-from app.bench.cpu_share import CpuShare
-from app.bench.server import ServerProcess
+from bench.cpu_share import CpuShare
+from harness.browser import launch_chromium, wait_for_scene_render
+from harness.server import ServerProcess
+from harness.stats import percentiles
 
 TARGETS = {"estop_p99_ms": 15.0, "tick_p99_ms": 2.0, "rtf_min": 0.995}
-
-
-def _percentiles(values: list[float]) -> dict[str, float]:
-    data = np.asarray(values, dtype=float)
-    return {
-        "n": int(data.size),
-        "p50": round(float(np.percentile(data, 50)), 3),
-        "p99": round(float(np.percentile(data, 99)), 3),
-        "max": round(float(data.max()), 3),
-        "mean": round(float(data.mean()), 3),
-    }
 
 
 def headless_rtf(sim_seconds: float = 20.0, seed: int = 0) -> dict[str, float]:
@@ -85,11 +73,11 @@ def _where_the_time_goes(measured: list[Any]) -> dict[str, Any]:
     # (one wait and one latched event per press, in order)
     sent_to_server = [total - wait for total, wait in zip(to_server, in_page, strict=False)]
     return {
-        "event_to_handler_ms": _percentiles(in_page) if in_page else None,
-        "handler_to_server_ms": _percentiles(sent_to_server) if sent_to_server else None,
-        "page_to_server_ms": _percentiles(to_server) if to_server else None,
-        "server_to_robot_ms": _percentiles(server_to_robot) if server_to_robot else None,
-        "robot_applies_ms": _percentiles(robot) if robot else None,
+        "event_to_handler_ms": percentiles(in_page) if in_page else None,
+        "handler_to_server_ms": percentiles(sent_to_server) if sent_to_server else None,
+        "page_to_server_ms": percentiles(to_server) if to_server else None,
+        "server_to_robot_ms": percentiles(server_to_robot) if server_to_robot else None,
+        "robot_applies_ms": percentiles(robot) if robot else None,
         "first_path": sources,
     }
 
@@ -132,7 +120,7 @@ def run_core(presses: int = 100, viewers: int = 2, duration_s: float = 30.0) -> 
         with CpuShare() as cpu:
             latencies, parts = _press_estop(operator, server, presses)
         result["cpu_percent_of_a_core_while_pressing"] = cpu.shares()
-        result["estop_latency_ms"] = _percentiles(latencies)
+        result["estop_latency_ms"] = percentiles(latencies)
         result["estop_parts"] = parts
         priority = [e["message"] for e in server.get("/api/events") if e["kind"] == "control/priority"]
         result["serve"]["control_priority"] = priority[0] if priority else "unknown"

@@ -18,10 +18,11 @@ examples), `out_of_world` (must be refused), `clarify` (must be asked about).
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Any, Literal
 
-from app.bench.planner_cases import (
+from harness.planner_cases import (
     APPLE,
     BOTTLE,
     COUNTER,
@@ -33,10 +34,15 @@ from app.bench.planner_cases import (
     TABLE,
     Seed,
     carry,
+    context_for,
     fetch,
     find,
     go,
+    plan_matches,
 )
+from robot.model.world import WorldLayout
+from robot.planning.pipeline import PlanningPipeline
+from robot.planning.planner import ClarificationNeeded, PlanningError
 
 __all__ = [
     "APPLE",
@@ -107,3 +113,42 @@ def seq(*parts: Seed) -> Seed:
             if not steps or steps[-1] != step:
                 steps.append(step)
     return steps
+
+
+# the issue's bars, on every set
+BARS = {"everyday": 0.94, "paraphrase": 0.95, "out_of_world": 1.0}
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What a planner made of one command: a plan (flat actions), a question, or a refusal, and who planned it."""
+
+    plan: list[dict[str, str]] | None = None
+    question: str | None = None
+    refusal: str | None = None
+    planner: str = ""
+    latency_s: float = 0.0
+
+    def right_for(self, case: LanguageCase) -> bool:
+        if case.expected == REFUSE:
+            return self.refusal is not None
+        if case.expected == CLARIFY:
+            return self.question is not None
+        return self.plan is not None and plan_matches(case.expected, self.plan)  # type: ignore[arg-type]
+
+    def said(self) -> Any:
+        if self.plan is not None:
+            return self.plan
+        return {"clarify": self.question} if self.question is not None else {"refused": self.refusal}
+
+
+def plan_case(pipeline: PlanningPipeline, case: LanguageCase, layout: WorldLayout) -> Outcome:
+    context = context_for(case, layout)
+    started = time.perf_counter()
+    try:
+        result = pipeline.plan(case.text, context)
+    except ClarificationNeeded as exc:
+        return Outcome(question=exc.question, latency_s=time.perf_counter() - started)
+    except PlanningError as exc:
+        return Outcome(refusal=str(exc), latency_s=time.perf_counter() - started)
+    return Outcome(plan=result.plan.to_seed_list(), planner=result.planner, latency_s=time.perf_counter() - started)

@@ -7,7 +7,7 @@ without loopback's zero delay and loss.
                                       delay 20 +- 5 ms each way      tbf 2 Mbit/s towards the operator
                                       1 % of frames lost, cut/restore
 
-The kernel here has no netem qdisc, so delay, jitter, loss and cuts are made by `app.bench.frame_forwarder` (raw
+The kernel here has no netem qdisc, so delay, jitter, loss and cuts are made by `harness.frame_forwarder` (raw
 sockets on the two veth ends in a third namespace); the rate limit is the kernel's `tbf` qdisc on the interface
 towards the operator (frames beyond its queue are dropped, as at a real bottleneck). The veths' offloads are off
 so that every frame is a real, checksummed, MTU-sized Ethernet frame. Names are unique per run; everything made
@@ -212,7 +212,7 @@ class ImpairedLink:
         argv = [
             sys.executable,
             "-m",
-            "app.bench.frame_forwarder",
+            "harness.frame_forwarder",
             "tosrv",
             "toop",
             "--delay-ms",

@@ -33,8 +33,8 @@ import httpx
 import viser
 import websockets
 
-from app.bench.core import _percentiles
-from app.bench.server import ServerProcess
+from harness.server import ServerProcess
+from harness.stats import percentiles
 
 TARGETS = {"estop_p99_ms": 15.0, "rtf_min": 0.995, "viewers_held": 1.0}
 COMMANDS = ("go to the kitchen counter", "go to the living-room table", "go to the charging dock")
@@ -233,13 +233,13 @@ def run_load(viewers: int = 20, presses: int = 100) -> dict[str, Any]:
         "refusal_reasons": sorted(operator.refusals),
         "loaded_s": round(loaded_s, 1),
     }
-    result["estop_latency_ms"] = _percentiles(operator.latencies_ms)
+    result["estop_latency_ms"] = percentiles(operator.latencies_ms)
     received = [a - b for a, b in zip(operator.latencies_ms, operator.server_ms, strict=True)]
     relayed = [a - b for a, b in zip(operator.server_ms, operator.worker_ms, strict=True)]
     result["estop_latency_parts_ms"] = {
-        "client_to_server": _percentiles(received),
-        "server_to_robot_process": _percentiles(relayed),
-        "robot_process_to_applied": _percentiles(operator.worker_ms),
+        "client_to_server": percentiles(received),
+        "server_to_robot_process": percentiles(relayed),
+        "robot_process_to_applied": percentiles(operator.worker_ms),
     }
     result["serve"] = {
         "rtf": round(rtf, 4),

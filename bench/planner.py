@@ -12,8 +12,8 @@ from typing import Any
 
 import numpy as np
 
-from app.bench.planner_cases import CASES, context_for, plan_matches
 from app.settings import Settings
+from harness.planner_cases import CASES, context_for, plan_matches
 from robot.model.world import generate_world
 from robot.planning.pipeline import BACKENDS, build_pipeline
 from robot.planning.planner import PlanningError

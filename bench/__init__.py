@@ -10,15 +10,15 @@ from pathlib import Path
 
 def run_suite(suite: str, args: argparse.Namespace) -> int:
     if suite == "core":
-        from app.bench.core import run_core
+        from bench.core import run_core
 
         result = run_core(presses=args.presses, viewers=args.viewers or 2, duration_s=args.duration or 30.0)
     elif suite == "load":
-        from app.bench.load import run_load
+        from bench.load import run_load
 
         result = run_load(viewers=args.viewers or 20, presses=args.presses)
     elif suite == "walk":
-        from app.bench.walk import run_walk
+        from bench.walk import run_walk
 
         result = run_walk(
             scripts=args.scripts,
@@ -27,7 +27,7 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
             realtime_s=args.realtime_duration,
         )
     elif suite == "perception":
-        from app.bench.perception import run_perception
+        from bench.perception import run_perception
 
         result = run_perception(
             seeds=args.seeds or 50,
@@ -37,7 +37,7 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
             tours=args.tours,
         )
     elif suite == "capstone":
-        from app.bench.capstone import TASKS, run_capstone
+        from bench.capstone import TASKS, run_capstone
 
         tasks = tuple(t.strip() for t in args.tasks.split(",") if t.strip())
         unknown = [t for t in tasks if t not in TASKS]
@@ -47,7 +47,7 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
             return 2
         result = run_capstone(seeds=args.seeds or 30, seed=args.seed or 0, tasks=tasks, jobs=args.jobs)
     elif suite == "behaviours":
-        from app.bench.behaviours import BEHAVIOURS, run_behaviours_bench
+        from bench.behaviours import BEHAVIOURS, run_behaviours_bench
 
         chosen = tuple(b.strip() for b in (args.behaviours or ",".join(BEHAVIOURS)).split(",") if b.strip())
         unknown = [b for b in chosen if b not in BEHAVIOURS]
@@ -59,14 +59,16 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
             seeds=args.seeds or 10, seed=args.seed or 0, behaviours=chosen, jobs=args.jobs, heldout_seed=heldout
         )
     elif suite == "speech":
-        from app.bench.spoken import run_speech
+        from bench.spoken import run_speech
 
         sets = tuple(s.strip() for s in args.sets.split(",") if s.strip())
         engines = tuple(e.strip() for e in args.engines.split(",") if e.strip())
-        result = run_speech(sets=sets, engines=engines, robot_microphone=not args.no_robot_microphone)
+        result = run_speech(
+            sets=sets, engines=engines, robot_microphone=not args.no_robot_microphone, quick=args.quick
+        )
     elif suite == "planner":
-        from app.bench.planner import parse_backends, run_planner
         from app.settings import get_settings
+        from bench.planner import parse_backends, run_planner
 
         try:
             backends = parse_backends(args.backends or "rules")
@@ -75,9 +77,9 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
             return 2
         result = run_planner(get_settings(), backends, repeat=args.repeat, no_fallback=args.no_fallback)
     elif suite == "language":
-        from app.bench.language import run_language
-        from app.bench.planner import parse_backends
         from app.settings import get_settings
+        from bench.language import run_language
+        from bench.planner import parse_backends
 
         try:
             backends = parse_backends(args.backends) if args.backends else None
@@ -86,27 +88,27 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
             return 2
         result = run_language(get_settings(), backends, no_fallback=args.no_fallback)
     elif suite == "sessions":
-        from app.bench.sessions import run_sessions
+        from bench.sessions import run_sessions
 
         result = run_sessions(phase_s=args.duration or 30.0, session_minutes=args.session_minutes)
     elif suite == "dynamixel":
-        from app.bench.dynamixel import run_dynamixel
+        from bench.dynamixel import run_dynamixel
 
         result = run_dynamixel(seconds=args.duration or 10.0)
     elif suite == "diagnostics":
-        from app.bench.diagnostics import run_diagnostics
+        from bench.diagnostics import run_diagnostics
 
         result = run_diagnostics(duration_s=args.duration or 60.0)
     elif suite == "network":
-        from app.bench.network import run_network
+        from bench.network import run_network
 
         result = run_network(
             presses=args.presses, cuts=args.cuts, viewer_seconds=args.duration or 20.0, seed=args.seed or 0
         )
     elif suite == "voice":
-        from app.bench.voice import run_voice
+        from bench.voice import run_voice
 
-        result = run_voice()
+        result = run_voice(quick=args.quick)
     else:  # pragma: no cover - argparse restricts the choices
         raise SystemExit(f"unknown suite {suite}")
     text = json.dumps(result, indent=2)

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from app.bench.planner_cases import (
+from harness.planner_cases import (
     APPLE,
     BOTTLE,
     COUNTER,

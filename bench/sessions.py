@@ -187,8 +187,8 @@ def review(workdir: Path, session_id: int) -> dict[str, Any]:
     """The long session through the real server and a real browser."""
     import httpx
 
-    from app.bench.browser import launch_chromium
-    from app.bench.server import ServerProcess
+    from harness.browser import launch_chromium
+    from harness.server import ServerProcess
 
     out: dict[str, Any] = {}
     with ServerProcess(workdir, extra_env={"HUMANOID_PERCEPTION": "false"}) as server:

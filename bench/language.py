@@ -9,48 +9,19 @@ LLM backends are measured only where configured (HUMANOID_OPENAI_*, HUMANOID_LOC
 
 from __future__ import annotations
 
-import time
 from collections import Counter
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from app.bench.language_cases import CLARIFY, KINDS, REFUSE, LanguageCase
-from app.bench.language_dev import DEV
-from app.bench.language_heldout import HELDOUT
-from app.bench.planner_cases import context_for, plan_matches
 from app.settings import Settings
+from harness.language_cases import BARS, CLARIFY, KINDS, LanguageCase, Outcome, plan_case
+from harness.language_dev import DEV
+from harness.language_heldout import HELDOUT
 from robot.model.world import WorldLayout, generate_world
 from robot.planning.pipeline import PlanningPipeline, build_pipeline
-from robot.planning.planner import ClarificationNeeded, PlanningError
 
 SETS: dict[str, tuple[LanguageCase, ...]] = {"dev": DEV, "heldout": HELDOUT}
-# the issue's bars, on every set
-BARS = {"everyday": 0.94, "paraphrase": 0.95, "out_of_world": 1.0}
-
-
-@dataclass(frozen=True)
-class Outcome:
-    """What a planner made of one command: a plan (flat actions), a question, or a refusal, and who planned it."""
-
-    plan: list[dict[str, str]] | None = None
-    question: str | None = None
-    refusal: str | None = None
-    planner: str = ""
-    latency_s: float = 0.0
-
-    def right_for(self, case: LanguageCase) -> bool:
-        if case.expected == REFUSE:
-            return self.refusal is not None
-        if case.expected == CLARIFY:
-            return self.question is not None
-        return self.plan is not None and plan_matches(case.expected, self.plan)  # type: ignore[arg-type]
-
-    def said(self) -> Any:
-        if self.plan is not None:
-            return self.plan
-        return {"clarify": self.question} if self.question is not None else {"refused": self.refusal}
 
 
 def configured_backends(settings: Settings) -> tuple[str, ...]:
@@ -65,18 +36,6 @@ def configured_backends(settings: Settings) -> tuple[str, ...]:
     if settings.local_model_path:
         backends.append("local")
     return tuple(backends)
-
-
-def plan_case(pipeline: PlanningPipeline, case: LanguageCase, layout: WorldLayout) -> Outcome:
-    context = context_for(case, layout)
-    started = time.perf_counter()
-    try:
-        result = pipeline.plan(case.text, context)
-    except ClarificationNeeded as exc:
-        return Outcome(question=exc.question, latency_s=time.perf_counter() - started)
-    except PlanningError as exc:
-        return Outcome(refusal=str(exc), latency_s=time.perf_counter() - started)
-    return Outcome(plan=result.plan.to_seed_list(), planner=result.planner, latency_s=time.perf_counter() - started)
 
 
 def run_language(settings: Settings, backends: tuple[str, ...] | None = None, no_fallback: bool = False) -> dict:

@@ -1,17 +1,12 @@
-"""`humanoid bench voice`: spoken commands through the recogniser and the planner.
+"""Spoken commands as a rig: the planner's paraphrase suite said by espeak-ng in several voices and speeds, clean
+and in noise, heard by the grammar recogniser and planned (`run_trials`), word errors counted as speech research
+counts them, and a recording played into the robot's microphone path in real time (`ReplayStream`).
 
-The commands are the planner's paraphrase suite that can be said (not free text to say, not coordinates), spoken by
-espeak-ng in several voices and speeds, clean and with white noise at 10 dB SNR. Reported: word error rate, how
-often the plan from the transcript is right, the recogniser's real-time factor, and the latency from the end of
-speech to a validated plan (decode + plan), p50 target <= 300 ms. And the robot microphone's whole path in real
-time (voice-activity detection, the recogniser's process, planning): commands heard right, and the latency from
-the last sound of a command reaching the microphone to its plan.
+`humanoid bench voice` and `humanoid bench speech` measure with it; the tests check recognition with it.
 """
 
 from __future__ import annotations
 
-import contextlib
-import tempfile
 import threading
 import time
 from dataclasses import dataclass
@@ -19,26 +14,17 @@ from typing import Any
 
 import numpy as np
 
-from app.bench.planner_cases import CASES, Case, context_for, plan_matches
-from robot.events import EventBus
-from robot.interface import CommandReply, Refusal
+from harness.planner_cases import CASES, Case, context_for, plan_matches
 from robot.model.world import generate_world
-from robot.planning.context import PlanningContext
 from robot.planning.pipeline import PlannerConfig, build_pipeline
 from robot.planning.planner import PlanningError
 from robot.planning.world_context import WorldContext, normalize
 from robot.speech.audio import RATE, Audio, add_noise
-from robot.speech.devices import AudioDevice
-from robot.speech.robot_voice import RobotVoice, VoiceConfig
 from robot.speech.sphinx import PocketSphinxASR
 from robot.speech.tts import synthesize_audio
 
 VOICES = (("en-us", 160), ("en-gb", 175), ("en-us", 140), ("en-gb-x-rp", 150))
 NOISY_SNR_DB = 10.0
-WER_CLEAN_TARGET = 0.10
-WER_NOISY_TARGET = 0.20
-PLAN_RIGHT_TARGET = 0.90
-LATENCY_P50_TARGET_MS = 300.0
 
 
 def spoken_cases() -> tuple[Case, ...]:
@@ -155,18 +141,6 @@ def summarise(trials: list[Trial]) -> dict[str, Any]:
     return result
 
 
-ROBOT_MICROPHONE_COMMANDS = (
-    "go to the charging dock",
-    "pick up the red mug from the kitchen counter",
-    "bring the green apple to the living room table",
-    "what do you see",
-    "go home",
-    "find the blue bottle",
-    "wait for three seconds",
-    "stop",
-)
-
-
 class ReplayStream:
     """An input device that plays a recording in real time (as `sounddevice.InputStream` calls back), noting when
     each block went out."""
@@ -206,97 +180,7 @@ class ReplayStream:
             self.sent_at.append(time.time())
 
 
-def run_robot_microphone(commands: tuple[str, ...] = ROBOT_MICROPHONE_COMMANDS) -> dict[str, Any]:
-    """Spoken commands with pauses between them through the robot microphone's whole path, in real time: voice
-    activity detection, the recogniser's own process, the rules planner. Latency: from the last sample of speech
-    reaching the microphone to the plan."""
-    layout = generate_world(0)
-    world = WorldContext.from_layout(layout)
-    planner = build_pipeline(PlannerConfig(backend="rules"))
-    pause = np.zeros(int(1.2 * RATE), np.int16)
-    pieces, speech_ends = [pause], []
-    for text in commands:
-        speech = trim(synthesize_audio(text, "en-us", 160).samples)
-        pieces += [speech, pause]
-        speech_ends.append(sum(map(len, pieces)) - len(pause))
-    samples = add_noise(Audio(np.concatenate(pieces)), 40.0, seed=1).samples  # a quiet room, not digital zero
-    streams: list[ReplayStream] = []
-
-    def stream(**kwargs: Any) -> ReplayStream:
-        streams.append(ReplayStream(samples, **kwargs))
-        return streams[-1]
-
-    def run(text: str) -> CommandReply:
-        try:
-            planner.plan(text, PlanningContext(world))
-            return CommandReply(True, "planned")
-        except PlanningError as exc:
-            return CommandReply(False, str(exc), Refusal.INVALID)
-
-    bus = EventBus()
-    with tempfile.TemporaryDirectory() as spool:
-        config = VoiceConfig(spool_dir=spool, engine="pocketsphinx")  # this bench measures the grammar recogniser
-        voice = RobotVoice(config, world.objects, world.places, bus.publish, run, bus.subscribe, input_stream=stream)
-        voice.start(AudioDevice("input", 0, "replayed recording", RATE), AudioDevice("output", None, "", 0, "none"))
-        time.sleep(len(samples) / RATE + 1.0)
-        voice.stop()
-    if voice.microphone is None or not streams:
-        return {"commands": len(commands), "error": voice.microphone_status}
-    sent_at, block = streams[0].sent_at, streams[0].block
-    heard = [e for e in bus.history() if e.kind == "speech/heard"]
-    latencies = []  # heard in order: the n-th utterance is the n-th command
-    for event, end in zip(heard, speech_ends, strict=False):
-        started = time.perf_counter()
-        with contextlib.suppress(PlanningError):
-            planner.plan(event.data["text"], PlanningContext(world))
-        plan_s = time.perf_counter() - started
-        latencies.append((event.wall_time_s - sent_at[min(len(sent_at) - 1, end // block)] + plan_s) * 1000)
-    return {
-        "commands": len(commands),
-        "heard": len(heard),
-        "heard_right": sum(e.data["text"] == c for e, c in zip(heard, commands, strict=False)),
-        "ran_unasked": sum(e.data["will_run"] for e in heard),
-        "end_of_speech_to_plan_ms": {
-            "p50": round(float(np.percentile(latencies, 50)), 1) if latencies else None,
-            "max": round(float(np.max(latencies)), 1) if latencies else None,
-        },
-    }
-
-
 def trim(samples: np.ndarray) -> np.ndarray:
     """espeak-ng's leading and trailing digital silence off: "end of speech" is the last sound."""
     loud = np.flatnonzero(np.abs(samples) > 200)
     return samples[loud[0] : loud[-1] + 1] if len(loud) else samples
-
-
-def run_voice() -> dict[str, Any]:
-    started = time.perf_counter()
-    trials = run_trials()
-    summary = summarise(trials)
-    summary["robot_microphone"] = run_robot_microphone()
-    clean, noisy = summary["clean"], summary.get("noisy_10db", {})
-    latency = clean["end_of_speech_to_plan_ms"]["p50"]
-    plan_right = min(clean["plan_right"], noisy.get("plan_right", 1.0))
-    bars = {
-        "wer_clean": _bar(WER_CLEAN_TARGET, clean["wer"], clean["wer"] <= WER_CLEAN_TARGET),
-        "wer_noisy_10db": _bar(WER_NOISY_TARGET, noisy.get("wer"), noisy.get("wer", 1.0) <= WER_NOISY_TARGET),
-        "plan_right_worst_of_clean_and_noisy": _bar(PLAN_RIGHT_TARGET, plan_right, plan_right >= PLAN_RIGHT_TARGET),
-        "latency_p50_ms": _bar(LATENCY_P50_TARGET_MS, latency, latency <= LATENCY_P50_TARGET_MS),
-    }
-    misheard = [t.__dict__ for t in trials if not t.plan_right][:40]
-    voices = [f"{v}@{w}" for v, w in VOICES]
-    wall_s = round(time.perf_counter() - started, 1)
-    commands = len({t.text for t in trials})
-    return {
-        "suite": "voice",
-        "commands": commands,
-        "voices": voices,
-        "wall_s": wall_s,
-        **summary,
-        "bars": bars,
-        "misheard": misheard,
-    }
-
-
-def _bar(target: float, measured: float | None, met: bool) -> dict[str, Any]:
-    return {"target": target, "measured": measured, "met": met}

@@ -1,5 +1,5 @@
 """The far end of `humanoid bench network`: what an operator's or a viewer's browser does over the network, run
-as a program of its own inside a network namespace (`ip netns exec NS python -m app.bench.network_client ...`).
+as a program of its own inside a network namespace (`ip netns exec NS python -m harness.network_client ...`).
 
 Each scenario prints its result as one JSON line on stdout (`watch` prints one line per event as they come):
 - `ready`: waits until the server answers `/api/health`;

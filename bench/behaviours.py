@@ -110,7 +110,7 @@ def run_one(behaviour: str, seed: int) -> dict[str, Any]:
     blocker = None
     said: list[bool] = [False]
     if behaviour == "patrol":
-        from app.bench.capstone import PathBlocker
+        from bench.capstone import PathBlocker
 
         params = {"laps": 2}
         from robot.behaviours.routes import waypoint_near

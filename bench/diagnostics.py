@@ -15,8 +15,9 @@ import time
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import psutil
+
+from harness.stats import percentiles
 
 TARGETS = {"monitor_cpu_pct_of_core": 2.0}
 
@@ -26,16 +27,6 @@ def _thread_cpu_s(native_id: int) -> float:
         if thread.id == native_id:
             return thread.user_time + thread.system_time
     raise RuntimeError(f"no thread {native_id}")
-
-
-def _stats(values: list[float]) -> dict[str, float]:
-    data = np.asarray(values, dtype=float)
-    return {
-        "n": int(data.size),
-        "p50": round(float(np.percentile(data, 50)), 3),
-        "p99": round(float(np.percentile(data, 99)), 3),
-        "max": round(float(data.max()), 3),
-    }
 
 
 def _time_to_stop(worker: Any, inject: Any) -> float:
@@ -118,10 +109,10 @@ def run_diagnostics(duration_s: float = 60.0, seed: int = 0) -> dict[str, Any]:
         "duration_s": duration_s,
         "statuses": statuses,
         "monitor_cpu_pct_of_core": round(cpu_pct, 3),
-        "sample_cpu_ms": _stats(samples),
+        "sample_cpu_ms": percentiles(samples),
         "control_while_monitoring": {"rtf": round(control.rtf, 4), "tick_p99_ms": round(control.tick_p99_ms, 3)},
-        "server_json_ms": _stats(json_ms),
-        "server_metrics_ms": _stats(metrics_ms),
+        "server_json_ms": percentiles(json_ms),
+        "server_metrics_ms": percentiles(metrics_ms),
         "overheat_to_safe_stop_s": round(heat_stop, 3),
         "control_stall_to_safe_stop_s": round(stall_stop, 3),
         "bars": {

@@ -7,7 +7,7 @@ commit. Labels follow `language_cases`.
 
 from __future__ import annotations
 
-from app.bench.language_cases import (
+from harness.language_cases import (
     APPLE,
     BOTTLE,
     CLARIFY,
