@@ -23,16 +23,16 @@ run: setup
 	$(BIN)/humanoid serve --host $(HOST) --port $(PORT)
 
 test: setup-test
-	$(BIN)/ruff check app robot tests examples
-	$(BIN)/ruff format --check app robot tests examples
+	$(BIN)/ruff check app robot bench harness tests examples
+	$(BIN)/ruff format --check app robot bench harness tests examples
 	$(BIN)/python scripts/docs_reference.py --check
 	$(BIN)/mkdocs build --strict -q -d site
 	$(BIN)/python scripts/check-aarch64
 	$(BIN)/python -m pytest -q
 
 lint: setup-test
-	$(BIN)/ruff check app robot tests examples
-	$(BIN)/ruff format --check app robot tests examples
+	$(BIN)/ruff check app robot bench harness tests examples
+	$(BIN)/ruff format --check app robot bench harness tests examples
 
 docs: setup-test
 	$(BIN)/python scripts/docs_reference.py

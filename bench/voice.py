@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from harness.speech_trials import VOICES, ReplayStream, run_trials, spoken_cases, summarise, trim
+from harness.speech_trials import NOISY_SNR_DB, VOICES, ReplayStream, run_trials, spoken_cases, summarise, trim
 from robot.events import EventBus
 from robot.interface import CommandReply, Refusal
 from robot.model.world import generate_world
@@ -113,10 +113,8 @@ def run_voice(quick: bool = False) -> dict[str, Any]:
     """`quick`: one voice, a few commands, clean only, two on the robot microphone (shows the bench works)."""
     started = time.perf_counter()
     voices = VOICES[:1] if quick else VOICES
-    if quick:
-        trials = run_trials(voices, snrs=(None,), cases=spoken_cases()[:QUICK_COMMANDS])
-    else:
-        trials = run_trials(voices)
+    snrs = (None,) if quick else (None, NOISY_SNR_DB)
+    trials = run_trials(voices, snrs=snrs, cases=spoken_cases()[:QUICK_COMMANDS] if quick else None)
     summary = summarise(trials)
     summary["robot_microphone"] = run_robot_microphone(QUICK_ROBOT_MICROPHONE if quick else ROBOT_MICROPHONE_COMMANDS)
     clean, noisy = summary["clean"], summary.get("noisy_10db", {})
