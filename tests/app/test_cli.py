@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import json
-import os
 import sqlite3
-import subprocess
-import sys
 
 import pytest
+
+from tests.support.cli import humanoid as run_humanoid
 
 RESULT_KEYS = {
     "success",
@@ -24,15 +23,9 @@ RESULT_KEYS = {
 
 
 def humanoid(tmp_path, *args: str, timeout_s: float = 120.0, env: dict[str, str] | None = None):
-    env = {
-        **os.environ,
-        "DATABASE_URL": f"sqlite:///{tmp_path / 'cli.db'}",
-        "HUMANOID_AUDIO_DIR": str(tmp_path / "audio"),
-        **(env or {}),
-    }
-    return subprocess.run(
-        [sys.executable, "-m", "app.cli", *args], capture_output=True, text=True, env=env, timeout=timeout_s
-    )
+    """The command with its database and recordings in this test's folder."""
+    own = {"DATABASE_URL": f"sqlite:///{tmp_path / 'cli.db'}", "HUMANOID_AUDIO_DIR": str(tmp_path / "audio")}
+    return run_humanoid(*args, env={**own, **(env or {})}, timeout_s=timeout_s)
 
 
 def test_run_prints_the_result_and_records_a_session(tmp_path) -> None:
@@ -169,13 +162,7 @@ def test_bench_language_reports_both_sets_against_the_bars(tmp_path) -> None:
 
 def test_plan_with_an_unreachable_llm_falls_back_to_rules_and_says_why(tmp_path) -> None:
     env_url = {"HUMANOID_OPENAI_BASE_URL": "http://127.0.0.1:9/v1"}
-    done = subprocess.run(
-        [sys.executable, "-m", "app.cli", "plan", "go to the dock", "--backend", "openai", "--json"],
-        capture_output=True,
-        text=True,
-        env={**os.environ, **env_url},
-        timeout=60,
-    )
+    done = run_humanoid("plan", "go to the dock", "--backend", "openai", "--json", env=env_url, timeout_s=60)
     assert done.returncode == 0, done.stderr
     assert json.loads(done.stdout)[0] == {"action": "navigate_to", "target": "charging dock"}
     assert "openai: cannot reach http://127.0.0.1:9/v1" in done.stderr and "planned by rules instead" in done.stderr

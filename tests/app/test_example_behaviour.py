@@ -11,6 +11,8 @@ import sys
 import tomllib
 from pathlib import Path
 
+from tests.support.cli import humanoid as run_humanoid
+
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "wave-hello"
 
 
@@ -37,9 +39,7 @@ def installed_like(tmp_path: Path) -> dict[str, str]:
 
 
 def humanoid(env: dict[str, str], *args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "app.cli", *args], capture_output=True, text=True, env=env, timeout=600
-    )
+    return run_humanoid(*args, env=env)
 
 
 def test_the_example_is_listed_and_runs_once_installed(tmp_path: Path) -> None:

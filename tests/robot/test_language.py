@@ -344,3 +344,22 @@ def test_a_request_after_a_garbled_polite_frame_is_still_planned(heard: str, wor
 def test_words_before_a_request_that_change_or_add_to_it_are_not_skipped(said: str, world) -> None:
     with pytest.raises(PlanningError):
         plan(said, world)
+
+
+@pytest.mark.parametrize(
+    ("said", "place"),
+    [
+        ("stop by the kitchen", "kitchen counter"),  # a visit, not a stop
+        ("swing by the charger", "charging dock"),
+        ("don't stop until you reach the table", "living-room table"),
+        ("keep walking till you get to the dock", "charging dock"),
+        ("walk to the table without stopping", "living-room table"),  # how, not where
+    ],
+)
+def test_a_stop_word_inside_a_walk_is_part_of_the_walk(said: str, place: str, world) -> None:
+    assert plan(said, world)[0] == ("navigate_to", place)
+
+
+def test_a_stop_said_with_words_that_are_elsewhere_cut_off_is_still_a_stop(world) -> None:
+    assert plan("stop the robot", world) == [("stop",)]  # ("robot" after a request is otherwise a filler)
+    assert plan("stop by the kitchen and get the green apple", world)[:3] == FETCH_APPLE

@@ -57,12 +57,12 @@ def read_step(clause: Clause) -> Step | None:
     said = _said(clause)
     if said is not None:
         return said
-    clause = clause.without_suffixes().without_infixes()
-    text = clause.text
-    for pattern, build in _shapes():
-        match = pattern.fullmatch(text)
-        if match:
-            return build(match, clause)
+    # what is said after the request is cut off first; a shape may hold such words ("stop the robot")
+    for read in (clause.without_suffixes().without_infixes(), clause.without_infixes()):
+        for pattern, build in _shapes():
+            match = pattern.fullmatch(read.text)
+            if match:
+                return build(match, read)
     return None
 
 
@@ -254,6 +254,19 @@ def _shapes() -> tuple[tuple[re.Pattern[str], Build], ...]:
             _go,
         ),
         (rf"(?:{verbs(*GO_VERBS)})(?: {_AWAY})? (?P<place>there|over there)", _go),
+        # a visit: "stop by the kitchen", "drop in at the dock", "swing by the table"
+        (
+            rf"(?:{verbs('stop', 'drop', 'pop', 'swing', 'call')})(?: {_AWAY})? "
+            r"(?:by|at|in at|in on|round|round to|off at) (?P<place>.+)",
+            _go,
+        ),
+        # a walk to its end: "don't stop until you reach the table", "keep walking till you get to the dock"
+        (
+            rf"(?:do not stop|(?:keep|carry on|continue)(?: on)?(?: (?:going|walking|moving|driving))?|"
+            rf"(?:{verbs(*GO_VERBS)})(?: on)?(?: straight)?) (?:until|till|til) you (?:reach|get to|arrive at|"
+            r"are at|get at|make it to|come to) (?P<place>.+)",
+            _go,
+        ),
         # "go stand by the charger", "wait at the table"
         (
             r"(?:go (?:and )?)?(?:stand|wait|stay|park yourself|position yourself) (?:by|at|next to|near|beside|"

@@ -71,7 +71,8 @@ FILLER_SUFFIXES = word_list("""
     if you do not mind, when you get a chance, when you can, if you can, if you could, thank you very much,
     thanks a lot, thank you, thanks, cheers, please, for me, for us, right now, right away, immediately, at once,
     quickly, now, robot, buddy, mate, pal, would you, will you, could you, ok, okay, first, too, as well, and then,
-    and, then, if possible, if you would, yeah, pls, plz""")
+    and, then, if possible, if you would, yeah, pls, plz, without stopping, without a stop, without pausing,
+    without a break, non stop, nonstop, in one go""")
 # said anywhere in a request without changing it ("bring the mug for me to the table")
 FILLER_INFIXES = word_list("please, for me, for us, kindly")
 # what joins two steps said one after the other
