@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import os
 import socket
 import subprocess
@@ -16,10 +17,30 @@ import httpx
 STARTUP_TIMEOUT_S = 120.0
 
 
+# (below the kernel's ephemeral ports, 32768 and up, which a server binding port 0 gets)
+PORTS_FROM = 20000
+PORTS_PER_WORKER = 2000
+_port_turn = itertools.count(os.getpid() % PORTS_PER_WORKER)
+
+
 def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
+    """A port free now. Under pytest-xdist each test process takes its ports from a range of its own, so two
+    processes never pick the same port between choosing it and binding it (the kernel's own choice could)."""
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "")
+    if not worker.startswith("gw"):
+        with socket.socket() as sock:
+            sock.bind(("127.0.0.1", 0))
+            return int(sock.getsockname()[1])
+    first = PORTS_FROM + int(worker[2:]) * PORTS_PER_WORKER
+    for _ in range(PORTS_PER_WORKER):
+        port = first + next(_port_turn) % PORTS_PER_WORKER
+        with socket.socket() as sock:
+            try:
+                sock.bind(("127.0.0.1", port))
+            except OSError:
+                continue
+            return port
+    raise RuntimeError(f"no free port in {first}-{first + PORTS_PER_WORKER - 1}")
 
 
 class ServerProcess:

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 
-def wait_until(predicate, timeout: float = 5.0, interval: float = 0.05):
+def wait_until(predicate, timeout: float = 30.0, interval: float = 0.05):
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         value = predicate()
@@ -226,7 +226,7 @@ def test_teleop_posture_and_reset_endpoints(client) -> None:
     assert state["locomotion"]["phase"] == "standing" and state["mode"] == "idle"
 
 
-def _wait_plan(client, predicate, timeout_s: float = 10.0) -> dict:
+def _wait_plan(client, predicate, timeout_s: float = 30.0) -> dict:
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         plan = client.get("/api/state").json()["plan"]
@@ -238,7 +238,8 @@ def _wait_plan(client, predicate, timeout_s: float = 10.0) -> dict:
 
 def test_plans_can_wait_for_approval_be_approved_paused_and_resumed(client) -> None:
     assert client.put("/api/plan/approval", json={"required": True}).status_code == 200
-    assert client.get("/api/config").json()["approval_required"] is True
+    # (the robot's state says so from its next tick on)
+    wait_until(lambda: client.get("/api/config").json()["approval_required"] is True)
     queued = client.post("/api/commands", json={"text": "say hello"}).json()
     assert "awaits approval" in queued["message"]
     plan_id = _wait_plan(client, lambda p: p["state"] == "awaiting_approval")["plan_id"]
@@ -301,7 +302,7 @@ def _latched(client) -> bool:
     return client.get("/api/state").json()["estop_latched"]
 
 
-def _wait_released(client, timeout_s: float = 10.0) -> bool:
+def _wait_released(client, timeout_s: float = 30.0) -> bool:
     """The released state reaches the state board with the control loop's next tick."""
     deadline = time.monotonic() + timeout_s
     while _latched(client) and time.monotonic() < deadline:

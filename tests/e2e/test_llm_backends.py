@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import json
 import os
-import socket
 import subprocess
 import sys
 import time
@@ -22,6 +21,7 @@ import httpx
 import jsonschema
 import pytest
 
+from harness.server import free_port
 from robot.planning import prompt
 from robot.planning.context import PlanningContext
 from robot.planning.llm import parse_plan_text
@@ -55,12 +55,6 @@ def model_path() -> Path:
     return assemble()  # joins the package's chunks once into ~/.cache (checked by its sha256)
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 @dataclass(frozen=True)
 class LlamaServer:
     url: str
@@ -70,7 +64,7 @@ class LlamaServer:
 @pytest.fixture(scope="module")
 def llama_server(model_path: Path, tmp_path_factory) -> Iterator[LlamaServer]:
     _require("llama_cpp.server")
-    port = _free_port()
+    port = free_port()
     log = (tmp_path_factory.mktemp("llama") / "server.log").open("w")
     process = subprocess.Popen(
         # the GGUF is a base model without a chat template: the server is told its family's chat format

@@ -132,12 +132,15 @@ def test_word_errors_count_substitutions_insertions_and_deletions() -> None:
 def test_spoken_commands_in_three_voices_clean_and_in_noise_give_the_right_plans() -> None:
     cases = spoken_cases()
     assert len(cases) >= 40
-    summary = summarise(run_trials(voices=(("en-us", 160), ("en-gb", 175), ("en-us", 140)), cases=cases))
+    # each command in one of the three voices, in turn (every voice in every pair is `humanoid bench voice`'s)
+    voices = (("en-us", 160), ("en-gb", 175), ("en-us", 140))
+    trials = [t for i, voice in enumerate(voices) for t in run_trials(voices=(voice,), cases=cases[i :: len(voices)])]
+    summary = summarise(trials)
     clean, noisy = summary["clean"], summary["noisy_10db"]
     assert clean["wer"] <= 0.10, clean
     assert noisy["wer"] <= 0.20, noisy
     assert clean["plan_right"] >= 0.90, clean
-    assert noisy["plan_right"] >= 0.90, noisy  # decoding is deterministic: 0.914 here, 0.900 with the 4th voice
+    assert noisy["plan_right"] >= 0.90, noisy  # decoding is deterministic: 0.914 here (clean 0.929)
     # latency is a benchmark's business (`humanoid bench voice`), not a unit test's: it is only reported here
     assert clean["end_of_speech_to_plan_ms"]["p50"] > 0
     confidence = summary["confidence"]

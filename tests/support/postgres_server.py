@@ -12,12 +12,13 @@ import glob
 import os
 import shutil
 import signal
-import socket
 import subprocess
 import tempfile
 import time
 from collections.abc import Iterator
 from pathlib import Path
+
+from harness.server import free_port
 
 STARTUP_TIMEOUT_S = 30.0
 
@@ -34,12 +35,6 @@ def postgres_bin_dir() -> Path:
     if initdb:
         return Path(initdb).parent
     raise PostgresUnavailable("PostgreSQL's server is not installed (apt-get install -y postgresql)")
-
-
-def _free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
 
 
 def _die_with_parent() -> None:
@@ -90,7 +85,7 @@ def postgres_server(database: str = "test") -> Iterator[str]:
         subprocess.run(initdb, check=True, stdout=subprocess.DEVNULL, stderr=log, **as_user)
         port = 0
         for _ in range(5):  # another process may take the free port first
-            port = _free_port()
+            port = free_port()
             process = subprocess.Popen(
                 [
                     str(bin_dir / "postgres"),
