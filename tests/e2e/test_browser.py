@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+import time
 
 import httpx
 import pytest
@@ -131,6 +132,11 @@ def test_estop_button_latches_the_robot_and_release_is_explicit(page, server) ->
     assert not httpx.get(server.url + "/api/state").json()["estop_latched"]
 
 
+def _moved(server, start: dict, metres: float) -> bool:
+    pose = httpx.get(server.url + "/api/state").json()["pose"]
+    return abs(pose["x"] - start["x"]) + abs(pose["y"] - start["y"]) > metres
+
+
 def test_keyboard_teleop_walks_the_robot_and_letting_go_stops_it(page, server) -> None:
     expect = playwright_api.expect
     start = httpx.get(server.url + "/api/state").json()["pose"]
@@ -138,7 +144,9 @@ def test_keyboard_teleop_walks_the_robot_and_letting_go_stops_it(page, server) -
     page.keyboard.down("w")
     expect(page.locator("#mode")).to_have_text("mode: teleop", timeout=5_000)
     expect(page.locator("#st-walk")).to_contain_text("walking", timeout=5_000)
-    page.wait_for_timeout(3_000)
+    deadline = time.monotonic() + 60
+    while not _moved(server, start, 0.1) and time.monotonic() < deadline:  # held until it walked, however busy
+        page.wait_for_timeout(200)
     page.keyboard.up("w")
     expect(page.locator("#teleop-cmd")).to_have_text("released: stopping")
     expect(page.locator("#mode")).to_have_text("mode: idle", timeout=10_000)
@@ -161,13 +169,13 @@ def test_camera_stream_with_detections_map_and_a_search_from_the_page(page, serv
     expect = playwright_api.expect
     expect(page.locator("#perc-status")).to_contain_text("camera", timeout=30_000)
     expect(page.locator("#camera-fps")).to_contain_text("fps shown", timeout=15_000)
-    page.wait_for_timeout(2_000)
+    page.wait_for_function("window.humanoid.camera.seq > 10", timeout=60_000)
     view = page.evaluate(
         "({fps: window.humanoid.camera.fps, seq: window.humanoid.camera.seq,"
         " labels: window.humanoid.camera.detections.map(d => d.label)})"
     )
     # the stream flows (its rate is the perception bench's business: a software-rendered page shows ~5 fps here)
-    assert view["fps"] >= 2 and view["seq"] > 10
+    assert view["fps"] > 0 and view["seq"] > 10
     assert "red mug" in view["labels"]  # in view from where the robot starts (seed 0), boxed on the image
     # the camera canvas shows an image, not a blank
     spread = page.evaluate(
@@ -193,13 +201,13 @@ def test_diagnostics_plot_live_and_an_overheating_servo_alarms_and_stops_the_rob
     expect(page.locator("#diag-groups")).to_contain_text("servos", timeout=10_000)
     expect(page.locator("#v-servo")).to_contain_text("°C", timeout=5_000)
     page.wait_for_function("window.humanoid.diagnostics && document.getElementById('v-cpu').textContent !== '–'")
-    page.wait_for_timeout(2_500)  # a few samples: a line to draw
-    inked = page.evaluate(
+    # a few samples: a line drawn on the servo's sparkline
+    page.wait_for_function(
         "(() => { const c = document.getElementById('spark-servo');"
         " return c.getContext('2d').getImageData(0, 0, c.width, c.height).data.filter((v, i) => i % 4 === 3 && v)"
-        ".length; })()"
+        ".length > 20; })()",
+        timeout=60_000,
     )
-    assert inked > 20
     # to 77 C: past the diagnostics' limit (75), short of the servo's own shutdown (80)
     servos = server.get("/api/diagnostics")["groups"]["servos"]["statuses"]
     knee = next(s for s in servos if s["name"] == "servos/l_knee")

@@ -363,3 +363,8 @@ def test_a_stop_word_inside_a_walk_is_part_of_the_walk(said: str, place: str, wo
 def test_a_stop_said_with_words_that_are_elsewhere_cut_off_is_still_a_stop(world) -> None:
     assert plan("stop the robot", world) == [("stop",)]  # ("robot" after a request is otherwise a filler)
     assert plan("stop by the kitchen and get the green apple", world)[:3] == FETCH_APPLE
+
+
+def test_what_you_will_see_there_is_a_look_and_tell(world) -> None:
+    said = plan("walk to the table and tell me what you'll see", world)
+    assert said == [("navigate_to", "living-room table"), ("look_around",), ("describe_scene",)]
