@@ -45,15 +45,8 @@ def test_run_prints_the_result_and_records_a_session(tmp_path) -> None:
     assert result["session_id"] == 1
     assert result["sim_time_s"] > 0
 
-    second = json.loads(humanoid(tmp_path, "run", "pick up the red mug from the kitchen counter", "--json").stdout)
-    assert second["session_id"] == 2
-    # the capstone: it walks to the counter, finds the mug, grasps and lifts it, and says so
-    assert [s["status"] for s in second["steps"]] == ["succeeded"] * 4, second["steps"]
-    assert second["success"] is True and second["held_object"] == "red mug" and not second["fell"]
-    assert "at the kitchen counter" in second["steps"][0]["detail"]
-    assert "found red mug at" in second["steps"][1]["detail"]
-    assert "holding the red mug" in second["steps"][2]["detail"]
-    assert second["steps"][3]["action"] == "say"
+    second = json.loads(humanoid(tmp_path, "run", "wait for one second", "--json").stdout)
+    assert second["session_id"] == 2 and second["success"] is True  # a session each (the whole fetch: below)
     assert second["wall_time_s"] > 0  # how fast it ran is `humanoid bench capstone`'s to measure, not a test's
 
 
@@ -76,6 +69,9 @@ def test_bring_carries_the_mug_to_the_table_and_puts_it_down(tmp_path) -> None:
     ]
     assert [s["status"] for s in steps] == ["succeeded"] * 6, steps
     assert result["success"] is True and result["held_object"] is None and not result["fell"]
+    assert "at the kitchen counter" in steps[0]["detail"]
+    assert "found red mug at" in steps[1]["detail"]
+    assert "holding the red mug" in steps[2]["detail"]
     assert "put the red mug on the living-room table" in steps[4]["detail"]
 
 
