@@ -39,6 +39,7 @@ from harness.planner_cases import (
     find,
     go,
     plan_matches,
+    seq,
 )
 from robot.model.world import WorldLayout
 from robot.planning.pipeline import PlanningPipeline
@@ -74,7 +75,6 @@ CLARIFY = "clarify"
 Kind = Literal["everyday", "paraphrase", "out_of_world", "clarify"]
 KINDS: tuple[Kind, ...] = ("everyday", "paraphrase", "out_of_world", "clarify")
 LOOK: Seed = [{"action": "look_around"}]
-_CONFIRMATION = {"action": "say", "text": "*"}
 
 
 @dataclass(frozen=True)
@@ -101,18 +101,6 @@ def say(text: str) -> Seed:
 
 def wait(seconds: str) -> Seed:
     return [{"action": "wait", "seconds": seconds}]
-
-
-def seq(*parts: Seed) -> Seed:
-    """Steps done one after the other, labelled as the module's docstring says."""
-    steps: list[dict[str, str]] = []
-    for i, part in enumerate(parts):
-        last = i == len(parts) - 1
-        part = part if last or not part or part[-1] != _CONFIRMATION else part[:-1]
-        for step in part:
-            if not steps or steps[-1] != step:
-                steps.append(step)
-    return steps
 
 
 # the issue's bars, on every set

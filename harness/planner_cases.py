@@ -152,6 +152,19 @@ CASES: tuple[Case, ...] = (
 )
 
 
+def seq(*parts: Seed) -> Seed:
+    """Steps done one after the other: only the last part keeps its closing confirmation, and a step the previous
+    part ended with (already there) is not repeated."""
+    steps: list[dict[str, str]] = []
+    for i, part in enumerate(parts):
+        last = i == len(parts) - 1
+        part = part if last or not part or part[-1] != _say() else part[:-1]
+        for step in part:
+            if not steps or steps[-1] != step:
+                steps.append(step)
+    return steps
+
+
 def plan_matches(expected: Seed, actual: list[dict[str, Any]]) -> bool:
     """Same actions with the same arguments; a `say` expected as "*" may say anything (but something)."""
     if len(expected) != len(actual):

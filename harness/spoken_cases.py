@@ -32,21 +32,8 @@ from harness.planner_cases import (
     fetch,
     find,
     go,
+    seq,
 )
-
-_CONFIRMATION = {"action": "say", "text": "*"}
-
-
-def seq(*parts: Seed) -> Seed:
-    """Steps done one after the other, labelled as the module's docstring says."""
-    steps: list[dict[str, str]] = []
-    for i, part in enumerate(parts):
-        last = i == len(parts) - 1
-        part = part if last or not part or part[-1] != _CONFIRMATION else part[:-1]
-        for step in part:
-            if not steps or steps[-1] != step:
-                steps.append(step)
-    return steps
 
 
 def say(text: str) -> Seed:

@@ -56,18 +56,25 @@ def whisper_installed(setting: str = "") -> bool:
 
 
 def world_prompt(objects: dict[str, tuple[str, ...]], places: dict[str, tuple[str, ...]]) -> str:
-    """The world's names in sentences like the commands people give, after the stop words: whisper takes it as the
-    text that came before. On the development set's two hardest voices this prompt took word errors from 13.6 to
-    7.9 % clean and from 17.4 to 10.9 % in noise (a bare list of the names: 10.9 and 14.7 %)."""
+    """The world's names in sentences like the commands people give, after the stop words, then the other names of
+    more than one word people call them by: whisper takes it as the text that came before. On the development
+    set's two hardest voices the sentences took word errors from 13.6 to 7.9 % clean and from 17.4 to 10.9 % in
+    noise (a bare list of the names: 10.9 and 14.7 %). Polite openings ("could you please", "would you mind"),
+    "head to" and the other names took the development set (four voices) from 6.6 to 4.5 % clean and from 8.7 to
+    6.6 % in noise, and the held-out set, never tuned on, from 13.4 to 12.7 % and from 18.6 to 15.5 %."""
     things = [f"the {name}" for name in objects]
     where = [f"the {name.replace('-', ' ')}" for name in places]
     sentences = ["Stop! Halt! Freeze!"]
     if things and where:
-        sentences.append(f"Robot, pick up {things[0]} from {where[0]}.")
+        sentences.append(f"Robot, could you please pick up {things[0]} from {where[0]}?")
     if len(things) > 1 and len(where) > 1:
-        sentences.append(f"Bring {things[1]} to {where[1]}.")
-    sentences += [f"Go to {place}." for place in where[2:]]
+        sentences.append(f"Would you mind bringing {things[1]} to {where[1]}?")
+    sentences += [f"Head to {place}." for place in where[2:]]
     sentences += [f"Find {thing}." for thing in things[2:]]
+    named = {name.replace("-", " ") for name in (*objects, *places)}
+    others = [a for aliases in (*objects.values(), *places.values()) for a in aliases if " " in a and a not in named]
+    if others:
+        sentences.append("Also " + ", ".join(f"the {a}" for a in dict.fromkeys(others)) + ".")
     return " ".join(sentences)
 
 

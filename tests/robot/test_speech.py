@@ -260,3 +260,15 @@ def test_a_transcript_is_a_stop_when_its_words_are_a_stop_phrase_with_a_few_more
         assert is_stop_utterance(text), text
     for text in ("go to the dock and stop there", "stop by the kitchen and get the mug", "top", "bus stop", ""):
         assert not is_stop_utterance(text), text
+
+
+def test_whispers_prompt_names_every_thing_and_place_and_the_longer_names_people_use(world) -> None:
+    from robot.speech.whisper import world_prompt
+
+    prompt = world_prompt(world.objects, world.places)
+    assert prompt.startswith("Stop!")  # the stop words first: whisper expects them
+    for name in (*world.objects, *world.places):
+        assert name.replace("-", " ") in prompt
+    assert "the water bottle" in prompt and "the charging station" in prompt  # aliases of more than one word
+    assert prompt.count("the living room table") == 1  # a name said once, whichever table it came from
+    assert len(prompt.split()) < 120  # whisper keeps at most 223 tokens of a prompt
