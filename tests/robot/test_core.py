@@ -211,8 +211,9 @@ def test_a_new_body_is_driven_by_the_same_core_and_refuses_what_it_lacks_with_it
     assert robot.submit(SetPosture(Posture.CROUCH)).accepted
     crouch = body.crouch_posture()
     assert robot.wait_for(lambda s: s.sim_time_s > 0 and np.allclose(body.positions, crouch, atol=1e-6), 20.0)
-    state = robot.state()
-    assert state.mode == Mode.IDLE and np.allclose(state.qpos, crouch, atol=1e-6)
+    # the body is there; the state it publishes says so from the next tick on
+    assert robot.wait_for(lambda s: np.allclose(s.qpos, crouch, atol=1e-6), 20.0)
+    assert robot.state().mode == Mode.IDLE
 
 
 def test_the_e_stop_freezes_the_joints_at_once_refuses_motion_and_is_released_by_the_rules(robot, body) -> None:
