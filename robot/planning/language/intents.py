@@ -132,7 +132,8 @@ _AROUND = (
 )
 _LOOK_AND_TELL = (
     r"(?:(?:tell me|let me know|say|describe|report|can you tell me|tell me about) )?"
-    r"(?:(?:what|which objects|what things) (?:do|can) you (?:see|spot|make out)|what you (?:can |will |would )?(?:see|spot)|"
+    r"(?:(?:what|which objects|what things) (?:do|can) you (?:see|spot|make out)|"
+    r"what you (?:can |will |would )?(?:see|spot)|"
     rf"what are you seeing|what is (?:around|near|in front of|close to)(?: you| here)?|what have you seen|"
     rf"what can you spot|the scene|your surroundings|what you are seeing|what is there){_AROUND}"
 )
