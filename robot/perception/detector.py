@@ -103,12 +103,12 @@ class ObjectDetector:
     ) -> list[Detection]:
         """Every known object found in the image, best first."""
         hsv = cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)
-        saturated = (hsv[:, :, 1] >= MIN_SATURATION) & (hsv[:, :, 2] >= MIN_VALUE) & (depth > 0)
+        has_depth = (depth > 0).view(np.uint8)
         camera_position = world_from_camera[:3, 3]
         detections: list[Detection] = []
         height, width = depth.shape
         for colour in sorted({m.colour for m in self.models}):
-            mask = saturated & _hue_mask(hsv[:, :, 0], HUE_RANGES.get(colour, ()))
+            mask = _colour_mask(hsv, HUE_RANGES.get(colour, ())) & has_depth
             for pixels in _blobs(mask, depth, intrinsics, world_from_camera):
                 vs, us = pixels
                 if (
@@ -174,18 +174,20 @@ def _hue_distance(a: float, b: float) -> float:
     return min(d, 180.0 - d)
 
 
-def _hue_mask(hue: np.ndarray, ranges: Sequence[tuple[int, int]]) -> np.ndarray:
-    mask = np.zeros(hue.shape, dtype=bool)
-    for lo, hi in ranges:
-        mask |= (hue >= lo) & (hue <= hi)
-    return mask
+def _colour_mask(hsv: np.ndarray, hue_ranges: Sequence[tuple[int, int]]) -> np.ndarray:
+    """1 where a pixel is saturated and bright enough and its hue is in one of the ranges, else 0 (uint8; OpenCV
+    does this ~10x faster than numpy comparisons, and a camera frame is 300k pixels ten times a second)."""
+    mask = np.zeros(hsv.shape[:2], dtype=np.uint8)
+    for lo, hi in hue_ranges:
+        mask |= cv2.inRange(hsv, (lo, MIN_SATURATION, MIN_VALUE), (hi, 255, 255))
+    return (mask > 0).view(np.uint8)
 
 
 def _blobs(
     mask: np.ndarray, depth: np.ndarray, intrinsics: PinholeIntrinsics, world_from_camera: np.ndarray
 ) -> list[tuple[np.ndarray, np.ndarray]]:
     """Pixel index arrays (rows, cols) of each object candidate: connected blobs, fragments merged in 3D."""
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=8)
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
     fragments: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
     for label in range(1, count):
         if stats[label, cv2.CC_STAT_AREA] < MIN_BLOB_PIXELS:

@@ -59,6 +59,44 @@ def test_camera_is_a_d435_class_rgbd_sensor(suite: SensorSuite) -> None:
     assert out.camera is not None and out.camera.jpeg[:2] == b"\xff\xd8"  # a JPEG for the browser
 
 
+def test_one_render_gives_the_colour_and_depth_mujocos_renderer_draws_in_two(suite: SensorSuite) -> None:
+    """The camera reads colour and depth from one render (half the cost): they must be MuJoCo's own images."""
+    import mujoco
+
+    _sense(suite, _qpos(suite, 0.4, 0.3, 0.2, tilt=-0.4), lidar=False)
+    camera_id = suite.camera.camera_id
+    rgb, depth = suite.camera.renderer.render(suite.data, camera_id)
+    reference = mujoco.Renderer(suite.model, rgb.shape[0], rgb.shape[1])
+    try:
+        reference.update_scene(suite.data, camera=camera_id, scene_option=suite.camera.option)
+        for flag in (
+            mujoco.mjtRndFlag.mjRND_SHADOW,
+            mujoco.mjtRndFlag.mjRND_REFLECTION,
+            mujoco.mjtRndFlag.mjRND_SKYBOX,
+        ):
+            reference.scene.flags[flag] = 0
+        expected_rgb = reference.render().copy()
+        reference.enable_depth_rendering()
+        expected_depth = reference.render().copy()
+    finally:
+        reference.close()
+    assert np.array_equal(rgb, expected_rgb)
+    assert np.allclose(depth, expected_depth, rtol=1e-6, atol=1e-6)
+    assert 0.2 < float(np.median(depth)) < 6.0  # a real scene, not an empty frame
+
+
+def test_depth_noise_grows_with_the_square_of_the_distance_and_differs_frame_to_frame(suite: SensorSuite) -> None:
+    _sense(suite, _qpos(suite, 0.4, 0.3, 0.2, tilt=-0.4), lidar=False)
+    _, truth = suite.camera.renderer.render(suite.data, suite.camera.camera_id)
+    frames = [suite.camera.capture(suite.data).depth for _ in range(3)]
+    valid = (truth > 0.3) & (truth < 5.0) & np.all([f > 0 for f in frames], axis=0)
+    normalised = [(f[valid] - truth[valid]) / truth[valid] ** 2 for f in frames]
+    for errors in normalised:
+        assert float(np.std(errors)) == pytest.approx(suite.camera.depth_noise_per_m2, rel=0.1)
+        assert abs(float(np.mean(errors))) < 0.1 * suite.camera.depth_noise_per_m2
+    assert abs(float(np.corrcoef(normalised[0], normalised[1])[0, 1])) < 0.05  # a fresh draw each frame
+
+
 @pytest.mark.parametrize(("distance", "y"), [(0.5, 0.35), (0.9, 0.35), (1.4, 0.05)])
 def test_every_object_on_the_counter_is_found_and_localised_to_a_centimetre(
     suite: SensorSuite, distance: float, y: float
@@ -236,3 +274,17 @@ def test_the_mug_is_found_from_where_the_robot_stands_to_grasp_it(suite: SensorS
     mug = next(d for d in out.camera.detections if d.label == "red mug")
     assert mug.distance_m < 0.3
     assert np.linalg.norm(np.asarray(mug.position) - _truth(suite, "red mug")) < 0.015
+
+
+def test_the_sensor_process_yields_the_cpu_to_everything_interactive() -> None:
+    """On two cores sensing (the largest consumer) must not delay the browser's or the server's e-stop work."""
+    import os
+
+    from robot.perception.sensor_process import SENSOR_NICE, ProcessSensors
+
+    sensors = ProcessSensors(generate_world(0))
+    try:
+        assert os.sched_getscheduler(sensors.pid) == os.SCHED_BATCH
+        assert os.getpriority(os.PRIO_PROCESS, sensors.pid) == SENSOR_NICE
+    finally:
+        sensors.close()
