@@ -37,11 +37,9 @@ class Restartable(Protocol):
 
     def silent_for_s(self) -> float: ...
 
-    def restart(self) -> None: ...
+    def restart(self, latched: EStop) -> None: ...
 
     def stop(self) -> None: ...
-
-    def submit(self, command: EStop) -> object: ...
 
     def announce(self, kind: str, message: str, level: Level = Level.OK, **data: object) -> Event: ...
 
@@ -135,7 +133,7 @@ class WorkerSupervisor:
         if self._stop.wait(backoff):
             return
         try:
-            self._worker.restart()
+            self._worker.restart(EStop(source="supervisor", reason=f"the robot process was restarted after it {died}"))
         except Exception as exc:  # it could not even start: counted, and tried again after the next backoff
             log.exception("the robot process could not be restarted")
             self._worker.announce(
@@ -143,7 +141,6 @@ class WorkerSupervisor:
             )
             return
         self.restarts += 1
-        self._worker.submit(EStop(source="supervisor", reason=f"the robot process was restarted after it {died}"))
         self._safely(self._on_restart)
         self._worker.announce(
             "worker/restarted",

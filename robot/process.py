@@ -212,7 +212,8 @@ class WorkerProcess:
 
     # lifecycle -------------------------------------------------------------------------------------------------
 
-    def start(self) -> None:
+    def start(self, latched: EStop | None = None) -> None:
+        """Start the robot process; with `latched`, it latches that e-stop before it answers anything."""
         context = mp.get_context("spawn")  # never fork a process that already runs threads
         parent_conn, child_conn = context.Pipe(duplex=True)
         self._process = context.Process(
@@ -230,6 +231,7 @@ class WorkerProcess:
                 self._thresholds,
                 self._disk_path,
                 self._hardware,
+                latched,
             ),
             name="robot-worker",
             daemon=True,
@@ -254,10 +256,11 @@ class WorkerProcess:
         self._reader = threading.Thread(target=self._read, name="robot-worker-reader", daemon=True)
         self._reader.start()
 
-    def restart(self) -> None:
+    def restart(self, latched: EStop) -> None:
         """A new robot process in place of a dead one (or one that is killed first), behind this same proxy: its
-        subscribers, the mirror and the recorder keep their handles. The new robot starts as at start-up; what the
-        old one published stays with whoever consumed it, and late joiners start from the new robot."""
+        subscribers, the mirror and the recorder keep their handles. The new robot starts as at start-up, but with
+        `latched` latched before it answers anything (no command can reach it unlatched, not even for a tick);
+        what the old one published stays with whoever consumed it, and late joiners start from the new robot."""
         if self._process is not None and self._process.is_alive():
             self._process.kill()
         if self._process is not None:
@@ -270,7 +273,7 @@ class WorkerProcess:
         self._telemetry = TelemetryRing()  # the new robot numbers its samples from 0 again
         self._feed = SensorFeed()
         self._diagnostics = None
-        self.start()
+        self.start(latched)
 
     def _sim_time(self) -> float:
         try:
@@ -443,6 +446,17 @@ def merge_feed(current: SensorFeed, changed: SensorFeed) -> SensorFeed:
 # child process
 
 
+def _latch_before_ready(worker: Any, latched: EStop, timeout_s: float = 10.0) -> None:
+    """Latch the e-stop and wait until the published state shows it: the state sent with "ready" is what the
+    server shows first, and it must not show a restarted robot as free to move."""
+    worker.submit(latched)
+    deadline = time.monotonic() + timeout_s
+    while not worker.state().estop_latched:
+        if time.monotonic() > deadline:
+            raise RuntimeError("the e-stop did not latch on the restarted robot")
+        time.sleep(0.005)
+
+
 def child_main(
     conn: Connection,
     seed: int,
@@ -456,8 +470,10 @@ def child_main(
     diagnostics: Thresholds | None = None,
     disk_path: str = ".",
     hardware: HardwareSpec | None = None,
+    latched: EStop | None = None,
 ) -> None:
-    """Entry point of the worker process: build the robot, then serve commands until told to stop."""
+    """Entry point of the worker process: build the robot, then serve commands until told to stop. `latched`: an
+    e-stop to latch before the robot says it is ready (a restart after a crash)."""
     try:
         from robot.model.world import generate_world
 
@@ -490,6 +506,8 @@ def child_main(
         if realtime:  # every thread started from here on inherits it; the control loop goes higher still
             raise_thread_priority(WORKER_FIFO_PRIORITY)
         worker.start()
+        if latched is not None:
+            _latch_before_ready(worker, latched)
         description = worker.describe()  # after starting: it says which microphone and speaker were found
     except Exception as exc:
         # the operator's own mistakes (a servo not answering, a bad robot.toml) are said plainly, without a trace

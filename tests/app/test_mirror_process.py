@@ -16,7 +16,7 @@ from app.auth.roles import Principal, Role
 from app.auth.scene_tokens import SceneGrant, SceneTokens
 from app.viz.mirror_process import MIRROR_NICE, MirrorProcess
 from harness.server import free_port
-from robot.interface import StopTeleop, Teleop
+from robot.interface import EStop, ReleaseEStop, StopTeleop, Teleop
 from robot.process import WorkerProcess
 from tests.app.test_api import wait_until
 from tests.support.scene_viewer import scene_bytes, shift_click, view_url
@@ -66,7 +66,8 @@ def test_the_mirrors_draw_the_robot_behind_their_gates_go_on_after_a_restart_and
         # a login that ends: its token is refused from then on
         mirrors.revoke("login-ada")
         wait_until(lambda: httpx.get(f"http://127.0.0.1:{light}/s/{ada}/", timeout=10).status_code == 401, 10)
-        worker.restart()  # as the supervisor would: the mirror keeps its feed
+        worker.restart(EStop(source="test"))  # as the supervisor would: the mirror keeps its feed
+        assert worker.submit(ReleaseEStop(source="test")).accepted
         after_restart = mirrors.mirrors["light"].updates
         drive(worker, 2.0)
         wait_until(lambda: mirrors.mirrors["light"].updates > after_restart + 10, timeout=10)

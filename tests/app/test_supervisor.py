@@ -40,18 +40,16 @@ class DyingWorker:
     def silent_for_s(self) -> float:
         return self.silent_s if self.alive else 0.0
 
-    def restart(self) -> None:
+    def restart(self, latched) -> None:
         if self.fail_restart:
             raise RuntimeError("no robot today")
+        self.commands.append(latched)  # the new robot starts with it latched
         self.restarted += 1
         self.alive, self.exitcode, self.silent_s = True, None, 0.0
 
     def stop(self) -> None:
         self.stopped += 1
         self.alive = False
-
-    def submit(self, command):
-        self.commands.append(command)
 
     def announce(self, kind, message, level=Level.OK, **data):
         return self.bus.publish(kind, message, level, **data)

@@ -66,6 +66,23 @@ def test_liveness_follows_the_child_process() -> None:
     worker.stop()
 
 
+def test_a_restarted_robot_is_latched_from_its_first_state_and_refuses_to_move_until_released() -> None:
+    """After a crash the supervisor restarts the robot with the e-stop latched: not a tick later, when a command
+    could already have reached it, but before it answers anything."""
+    worker = WorkerProcess(seed=3, perception=False)
+    worker.start()
+    try:
+        first_pid = worker.pid
+        worker.restart(EStop(source="supervisor", reason="the robot process was restarted after it died"))
+        assert worker.pid != first_pid
+        assert worker.state().estop_latched  # the very first state the server sees
+        refused = worker.submit(RunCommand("walk forward 0.2 m"))
+        assert not refused.accepted and refused.refusal == Refusal.ESTOP_LATCHED
+        assert worker.submit(ReleaseEStop(source="test")).accepted
+    finally:
+        worker.stop()
+
+
 def test_diagnostics_and_faults_cross_the_process_boundary(remote) -> None:
     deadline = time.monotonic() + 10
     while remote.diagnostics() is None and time.monotonic() < deadline:
