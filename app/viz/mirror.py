@@ -43,7 +43,7 @@ FLOOR_THICKNESS = 0.01
 class MirrorProfile:
     """How much the viewers' browsers must render.
 
-    "full" is for browsers with a GPU: the robot's detailed meshes (about 930k triangles), image-based lighting,
+    "full" is for browsers with a GPU: the robot's detailed meshes (about 355k triangles), image-based lighting,
     an infinite floor grid. "light" is for browsers that render WebGL on the CPU: measured here, each "full" frame
     keeps Chromium's GPU process busy for ~200 ms at raised priority, which delays everything else on a small
     machine, the operator's e-stop click included. It draws the robot's convex collision shapes (about 6k
@@ -79,6 +79,10 @@ def mirror_model(mjcf_xml: str, profile: MirrorProfile) -> mujoco.MjModel:
             geom.type = mujoco.mjtGeom.mjGEOM_BOX
             geom.size = [geom.size[0], geom.size[1], FLOOR_THICKNESS / 2]
             geom.pos = [geom.pos[0], geom.pos[1], geom.pos[2] - FLOOR_THICKNESS / 2]
+    if not profile.detailed_meshes:  # meshes nothing draws any more: not compiled either
+        drawn = {g.meshname for g in spec.geoms if g.type == mujoco.mjtGeom.mjGEOM_MESH}
+        for mesh in [m for m in spec.meshes if m.name not in drawn]:
+            spec.delete(mesh)
     return spec.compile()
 
 

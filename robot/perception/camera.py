@@ -1,7 +1,7 @@
 """The head RGB-D camera in simulation: MuJoCo renders colour and depth offscreen on the CPU.
 
 Why it is cheap enough: it draws only simple shapes (the world's boxes and cylinders, the robot's convex collision
-geometry, never its 930k-triangle meshes), without shadows, reflections or multisampling. Measured here at
+geometry, never its detailed meshes), without shadows, reflections or multisampling. Measured here at
 640 x 480: about 6 ms per RGB-D frame, colour and depth read from one render (`offscreen.py`).
 
 EGL contexts belong to the thread that made them: create and use a camera on one thread.
