@@ -205,7 +205,7 @@ def _command_tree(help_of: Any, argv: list[str]) -> list[list[str]]:
 
 def humanoid_help(argv: list[str]) -> str:
     """`humanoid *argv --help` in this process (the parser alone: nothing starts)."""
-    from app.cli.main import build_parser
+    from app.cli.commands import build_parser
 
     os.environ["COLUMNS"] = HELP_COLUMNS
     output = io.StringIO()

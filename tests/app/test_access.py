@@ -15,7 +15,7 @@ from app.auth.access import AccessControl, InsecureBind
 from app.auth.roles import Role
 from app.auth.secrets import WeakPassword, hash_password, verify_password
 from app.auth.store import UserError, UserStore
-from app.cli.main import main
+from app.cli.commands import main
 from app.runtime import Runtime
 from app.sessions.db import make_engine, make_session_factory, upgrade_to_head
 from app.web.main import create_app

@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from app.cli.main import main
+from app.cli.commands import main
 from robot.hardware.bus_emulator import BusEmulator
 from robot.hardware.config import load_config
 

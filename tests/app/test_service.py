@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from app.cli.main import build_parser
+from app.cli.commands import build_parser
 from app.deploy import service_cli
 from app.deploy.install import Command, InstallError, apply, unreachable_paths
 from app.deploy.unit import ServiceSpec, existing_groups
