@@ -125,6 +125,27 @@ def test_positions_come_from_the_robots_estimate_of_where_it_is(suite: SensorSui
         np.testing.assert_allclose(shifted[name] - honest[name], [0.1, 0.0, 0.0], atol=0.004)
 
 
+def test_a_still_scene_is_not_drawn_again_and_anything_that_moves_is(suite: SensorSuite) -> None:
+    """A robot standing still sees the same picture (its sway is ~1e-5 rad a tenth of a second): the frame is sent
+    again, as a new frame; a mug moved by 3 cm is drawn, found and placed where it now is."""
+    suite.matcher.reset()
+    qpos = _qpos(suite, 0.75, 0.35, 0.0, tilt=-0.2)
+    first = _sense(suite, qpos, lidar=False).camera
+    swayed = qpos.copy()
+    swayed[suite.model.joint("l_knee").qposadr[0]] += 2e-5
+    again = _sense(suite, swayed, lidar=False).camera
+    assert again.seq == first.seq + 1 and first.render_ms > 0 and again.render_ms == 0.0  # not drawn again
+    assert again.jpeg == first.jpeg and again.detections == first.detections
+    mug = suite.model.body(object_body_name("red mug"))
+    moved = swayed.copy()
+    moved[suite.model.jnt_qposadr[mug.jntadr[0]] + 1] += 0.03  # its free joint's y
+    after = _sense(suite, moved, lidar=False).camera
+    assert after.seq == again.seq + 1 and after.render_ms > 0 and after.jpeg != first.jpeg
+    before_at = {d.label: np.asarray(d.position) for d in first.detections}["red mug"]
+    now_at = {d.label: np.asarray(d.position) for d in after.detections}["red mug"]
+    np.testing.assert_allclose(now_at - before_at, [0.0, 0.03, 0.0], atol=0.005)
+
+
 def test_look_alikes_are_not_labelled_as_objects() -> None:
     """A green plant and a red box in view, and no objects: nothing is reported."""
     base = generate_world(0)
