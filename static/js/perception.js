@@ -16,7 +16,13 @@
     const ws = new WebSocket(`${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/ws/camera`);
     ws.binaryType = "blob";
     ws.onmessage = async (msg) => {
-      if (typeof msg.data === "string") { view.header = JSON.parse(msg.data); return; }
+      if (typeof msg.data === "string") {
+        const header = JSON.parse(msg.data);
+        // The same picture again (the robot stands still): a frame all the same, with nothing to decode or draw.
+        if (header.unchanged) countFrame(header);
+        else view.header = header;
+        return;
+      }
       const header = view.header;
       if (!header) return;
       const bitmap = await createImageBitmap(msg.data); // decoded off the main thread
@@ -26,13 +32,23 @@
     ws.onclose = () => setTimeout(connectCamera, 1000);
   }
 
-  function drawFrame(bitmap, header) {
+  // The frame rate and sequence, shown twice a second: each change of the text is a layout and a paint of the page,
+  // and an e-stop press waits behind them on this thread.
+  const FPS_SHOWN_EVERY_MS = 500;
+  function countFrame(header) {
     const now = performance.now();
     view.frames.push(now);
     while (view.frames.length && now - view.frames[0] > 2000) view.frames.shift();
     view.fps = view.frames.length > 1 ? (view.frames.length - 1) * 1000 / (now - view.frames[0]) : 0;
     view.seq = header.seq;
     view.detections = header.detections;
+    if (view.fpsShownAt !== undefined && now - view.fpsShownAt < FPS_SHOWN_EVERY_MS) return;
+    view.fpsShownAt = now;
+    $("camera-fps").textContent = `${view.fps.toFixed(1)} fps shown · camera ${Number(header.camera_hz).toFixed(1)} Hz · frame ${header.seq}`;
+  }
+
+  function drawFrame(bitmap, header) {
+    countFrame(header);
     const sx = camera.width / header.width, sy = camera.height / header.height;
     cctx.drawImage(bitmap, 0, 0, camera.width, camera.height);
     if ($("show-detections").checked) {
@@ -51,7 +67,6 @@
         cctx.fillText(text, x0 * sx + 1, ty + 12);
       }
     }
-    $("camera-fps").textContent = `${view.fps.toFixed(1)} fps shown · camera ${Number(header.camera_hz).toFixed(1)} Hz · frame ${header.seq}`;
   }
 
   async function refreshMap() {

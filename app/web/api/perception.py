@@ -1,8 +1,10 @@
 """What the robot perceives: camera frames (with detections), the lidar scan, the occupancy map, world memory.
 
 `/ws/camera` streams frames to the page: for each new frame a JSON message {"type": "frame", seq, sim_time_s,
-width, height, detections, camera_hz} followed by one binary message, the JPEG. The detections belong to exactly
-the frame they precede, so overlays never lag the image; their boxes are in the camera's pixels (width x height),
+width, height, detections, camera_hz} followed by one binary message, the JPEG. A frame whose picture is the one
+this page was last sent (a robot standing still: the sensors send the last frame again) comes as its header alone,
+with "unchanged": true: no JPEG to send, decode or draw. The detections belong to exactly the frame they precede, so
+overlays never lag the image; their boxes are in the camera's pixels (width x height),
 while the JPEG is scaled to the page's width (`camera_stream_width`, see `app.web.camera_stream`). `/api/camera.jpg`
 is the camera's whole image.
 """
@@ -137,14 +139,13 @@ def occupancy_map_png(rt: RuntimeDep) -> Response:
     return Response(map_png(grid), media_type="image/png", headers=headers)
 
 
-def _frame_header(app_state: Any, rt: Runtime, frame: CameraImage) -> str:
-    """The frame's JSON header, encoded once for every page watching (kept on the app with its frame)."""
+def _frame_header(app_state: Any, rt: Runtime, frame: CameraImage, unchanged: bool = False) -> str:
+    """The frame's JSON header, encoded once for every page watching (kept on the app with its frame); `unchanged`:
+    the page already has its picture."""
     cached = getattr(app_state, "camera_header", None)
-    if cached is not None and cached[0] is frame:
-        return cached[1]
-    state = rt.worker.state().perception
-    text = json.dumps(
-        {
+    if cached is None or cached[0] is not frame:
+        state = rt.worker.state().perception
+        header = {
             "type": "frame",
             "seq": frame.seq,
             "sim_time_s": frame.sim_time_s,
@@ -153,9 +154,9 @@ def _frame_header(app_state: Any, rt: Runtime, frame: CameraImage) -> str:
             "camera_hz": state.camera_hz if state else 0.0,
             "detections": [dataclasses.asdict(d) for d in frame.detections],
         }
-    )
-    app_state.camera_header = (frame, text)
-    return text
+        cached = (frame, json.dumps(header), json.dumps({**header, "unchanged": True}))
+        app_state.camera_header = cached
+    return cached[2] if unchanged else cached[1]
 
 
 def _page_frames(app_state: Any, rt: Runtime) -> PageFrames:
@@ -171,15 +172,19 @@ async def camera_socket(ws: WebSocket) -> None:
     rt: Runtime = ws.app.state.runtime
     await ws.accept()
     frames = _page_frames(ws.app.state, rt)
-    last_seq = -1
+    last_seq, last_picture = -1, b""
     try:
         while True:
             frame = rt.worker.sensor_feed().camera
             if frame is not None and frame.seq != last_seq:
                 last_seq = frame.seq
-                jpeg = await frames.jpeg(frame)
-                await ws.send_text(_frame_header(ws.app.state, rt, frame))
-                await ws.send_bytes(jpeg)
+                if frame.jpeg == last_picture:
+                    await ws.send_text(_frame_header(ws.app.state, rt, frame, unchanged=True))
+                else:
+                    last_picture = frame.jpeg
+                    jpeg = await frames.jpeg(frame)
+                    await ws.send_text(_frame_header(ws.app.state, rt, frame))
+                    await ws.send_bytes(jpeg)
             await asyncio.sleep(CAMERA_POLL_S)
     except (WebSocketDisconnect, RuntimeError):
         pass
