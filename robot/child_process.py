@@ -2,17 +2,19 @@
 
 The robot worker runs its slow, lock-holding computations this way (the gait planner, the sensors): `subprocess`
 rather than `multiprocessing`, because the worker may itself be a daemon process, which may not have children.
-The child reads requests until its request pipe closes, so closing is how it is told to exit.
+Messages are framed by `multiprocessing.connection.Connection`, so the parent can ask whether an answer has
+arrived (`poll`) without blocking. The child reads requests until its request pipe closes, so closing is how it is
+told to exit.
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
-import pickle
 import subprocess
 import sys
-from typing import IO, Any
+from multiprocessing.connection import Connection
+from typing import Any
 
 
 class PipedChild:
@@ -29,15 +31,19 @@ class PipedChild:
         )
         os.close(request_read)
         os.close(answer_write)
-        self._requests: IO[bytes] = os.fdopen(request_write, "wb")
-        self._answers: IO[bytes] = os.fdopen(answer_read, "rb")
+        self._requests = Connection(request_write, readable=False)
+        self._answers = Connection(answer_read, writable=False)
 
     def send(self, request: Any) -> None:
-        pickle.dump(request, self._requests)
-        self._requests.flush()
+        self._requests.send(request)
 
     def receive(self) -> Any:
-        return pickle.load(self._answers)
+        """The next answer, waiting for it (EOFError: the child is gone)."""
+        return self._answers.recv()
+
+    def answered(self) -> bool:
+        """Whether an answer is waiting to be received (or the child is gone): `receive` will not wait."""
+        return self._answers.poll(0)
 
     def close(self) -> None:
         with contextlib.suppress(OSError):
@@ -47,3 +53,9 @@ class PipedChild:
         except subprocess.TimeoutExpired:
             self.process.kill()
         self._answers.close()
+
+
+def child_ends(request_fd: str, answer_fd: str) -> tuple[Connection, Connection]:
+    """The child's side: where its requests come from and where its answers go (`recv` raises EOFError when the
+    parent closes)."""
+    return Connection(int(request_fd), writable=False), Connection(int(answer_fd), readable=False)

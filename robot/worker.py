@@ -56,7 +56,7 @@ class RobotWorker(Robot):
         )
         body = SimBody(layout, backend, control_hz, perception)
         if locomotion is None:
-            locomotion = build_locomotion(body.backend, planner_process=realtime)
+            locomotion = build_locomotion(body.backend, planner_process=realtime, realtime=realtime)
         pipeline = planning if isinstance(planning, PlanningPipeline) else None
         if planner is not None:  # a given planner plans alone (tests)
             pipeline = PlanningPipeline(planner, planner.name, fallback=None)

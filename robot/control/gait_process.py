@@ -3,19 +3,25 @@
 placo holds the GIL for the ~5 ms of each replanning, which would stall a 100 Hz control thread in the same
 process; `ProcessGaitPlanner` runs `GaitPlannerCore` in its own Python process (started with `subprocess`, since
 the robot worker may itself be a daemon process, which `multiprocessing` forbids to have children). Requests and
-segments are pickled over a pair of pipes; the child exits when its request pipe closes.
+segments are pickled over a pair of pipes; the child exits when its request pipe closes. In real time the walk
+never waits for a late answer while its current segment lasts (`WalkingController`): a busy machine delays a
+replan, it does not stall the control loop.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
-import pickle
 import sys
 import time
 from pathlib import Path
 
-from robot.child_process import PipedChild
+from robot.child_process import PipedChild, child_ends
 from robot.control.gait import GaitPlannerCore, GaitSegment, StepCommand
+
+# The walk's plans are part of the control path: the planner answers ahead of ordinary work where the system allows
+# it (a niceness, not real-time scheduling: a planner that never returned must not shut the machine out).
+GAIT_NICE = -10
 
 
 class GaitPlannerError(RuntimeError):
@@ -46,65 +52,82 @@ class InlineGaitPlanner:
         answer, self._answer = self._answer, None
         return answer
 
+    def forget(self) -> None:
+        self._answer = None
+
     def close(self) -> None:
         pass
 
 
 class ProcessGaitPlanner:
-    """Plans in a child process; at most one request is outstanding at a time."""
+    """Plans in a child process; at most one wanted request is outstanding at a time.
+
+    `result(block=False)` does not wait: a late answer is None until it arrives. An answer the walk no longer wants
+    (`forget`, after an e-stop) is dropped when it comes, so forgetting never waits for the child either."""
 
     def __init__(self, model_path: Path, dt: float) -> None:
         # quiet: placo prints to stdout from C++
         self._child = PipedChild("robot.control.gait_process", str(model_path), str(dt), quiet=True)
-        self._outstanding = 0
+        self._wanted = False
+        self._unwanted = 0  # forgotten answers still to come, ahead of the wanted one
         self.last_wait_ms = 0.0  # how long the last result() blocked (in real time it never should)
         ready = self._child.receive()
         if ready != "ready":
             raise GaitPlannerError(f"gait planner failed to start: {ready}")
 
     def request(self, kind: str, command: StepCommand, t: float) -> None:
-        if self._outstanding:
+        if self._wanted:
             raise GaitPlannerError("a gait request is already outstanding")
         self._child.send((kind, command, t))
-        self._outstanding = 1
+        self._wanted = True
 
     def result(self, block: bool) -> GaitSegment | None:
-        if not self._outstanding:
+        if not self._wanted:
             return None
         started = time.perf_counter()
-        answer = self._child.receive()  # a pipe read; only ever called once the answer is due
+        while self._unwanted:
+            if not block and not self._child.answered():
+                return None
+            self._child.receive()
+            self._unwanted -= 1
+        if not block and not self._child.answered():
+            return None
+        answer = self._child.receive()
         self.last_wait_ms = (time.perf_counter() - started) * 1e3
-        self._outstanding = 0
+        self._wanted = False
         if isinstance(answer, BaseException):
             raise GaitPlannerError(f"gait planning failed: {answer!r}")
         return answer
+
+    def forget(self) -> None:
+        if self._wanted:
+            self._wanted = False
+            self._unwanted += 1
 
     def close(self) -> None:
         self._child.close()
 
 
 def _serve(model_path: str, dt: str, request_fd: str, answer_fd: str) -> None:
-    requests = os.fdopen(int(request_fd), "rb")
-    answers = os.fdopen(int(answer_fd), "wb")
+    requests, answers = child_ends(request_fd, answer_fd)
     try:
         core = GaitPlannerCore(Path(model_path), float(dt))
     except Exception as exc:  # report why, then exit
-        pickle.dump(f"{exc!r}", answers)
-        answers.flush()
+        answers.send(f"{exc!r}")
         return
-    pickle.dump("ready", answers)
-    answers.flush()
+    with contextlib.suppress(OSError):  # without the permission, it plans at the ordinary priority
+        os.setpriority(os.PRIO_PROCESS, 0, GAIT_NICE)
+    answers.send("ready")
     while True:
         try:
-            kind, command, t = pickle.load(requests)
+            kind, command, t = requests.recv()
         except EOFError:
             return
         try:
             answer: object = _answer(core, kind, command, t)
         except Exception as exc:  # the controller decides what a failed plan means
             answer = exc
-        pickle.dump(answer, answers)
-        answers.flush()
+        answers.send(answer)
 
 
 if __name__ == "__main__":

@@ -120,8 +120,9 @@ class LocomotionController:
         odometry: LegOdometry,
         limits: VelocityLimits = VelocityLimits(),
         pose_loop: bool = True,
+        wait_for_plans: bool = True,
     ) -> None:
-        self.walking = WalkingController(planner, ik, dt)
+        self.walking = WalkingController(planner, ik, dt, wait_for_plans)
         self.balance = balance
         self.velocity = VelocityShaper(limits)
         self.odometry = odometry

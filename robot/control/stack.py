@@ -33,10 +33,15 @@ class HasLegSensors(Protocol):
 
 
 def build_locomotion(
-    backend: SensingBackend, model_dir: Path | None = None, planner_process: bool = True, pose_loop: bool = True
+    backend: SensingBackend,
+    model_dir: Path | None = None,
+    planner_process: bool = True,
+    pose_loop: bool = True,
+    realtime: bool = False,
 ) -> LocomotionController:
     """The locomotion stack: gait planner (own process, or inline for tests and tools), IK, balance, odometry.
-    `model_dir`: where the placo model goes (default: the per-user cache, see `write_placo_model`)."""
+    `model_dir`: where the placo model goes (default: the per-user cache, see `write_placo_model`); `realtime`: a
+    late plan does not stall the control loop (headless, the walk waits for each plan: the same on every run)."""
     model = write_placo_model(model_dir)
     planner = ProcessGaitPlanner(model, CONTROL_DT) if planner_process else InlineGaitPlanner(model, CONTROL_DT)
     return LocomotionController(
@@ -46,6 +51,7 @@ def build_locomotion(
         CONTROL_DT,
         LegOdometry(model),
         pose_loop=pose_loop,
+        wait_for_plans=not realtime,
     )
 
 

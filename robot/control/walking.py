@@ -4,6 +4,11 @@ Each control tick it advances its own gait clock, asks the gait planner for a ne
 (due `PLAN_LEAD_S` ahead, so a planner in another process answers before the segment is needed), and tracks the
 current segment with whole-body IK. A zero command stops the walk with two steps in place; a new command after a
 stop starts again from standing.
+
+Headless (`wait_for_plans`), a due plan is waited for: the walk is the same on every run. In real time a plan that
+is late (a busy machine) is taken when it arrives: the walk carries on along the current segment, which reaches
+`SEGMENT_HORIZON_S` ahead, and a walk that is starting stands until its first plan. It waits only when the current
+segment is about to run out.
 """
 
 from __future__ import annotations
@@ -19,6 +24,8 @@ from robot.control.whole_body import WholeBodyIK
 
 REPLAN_PERIOD_S = 0.1
 PLAN_LEAD_S = 0.05
+# In real time, a late plan is waited for only when the current segment has less than this left (s).
+RUN_OUT_MARGIN_S = 0.1
 # Per-step displacements smaller than these count as "stand still" (m, rad).
 STILL_STEP_M = 0.002
 STILL_STEP_RAD = 0.005
@@ -30,6 +37,9 @@ class GaitPlanner(Protocol):
     def request(self, kind: str, command: StepCommand, t: float) -> None: ...
 
     def result(self, block: bool) -> GaitSegment | None: ...
+
+    def forget(self) -> None:
+        """The outstanding answer is not wanted any more (dropped when it comes, without waiting for it)."""
 
     def close(self) -> None: ...
 
@@ -57,8 +67,9 @@ def _is_still(c: StepCommand) -> bool:
 
 
 class WalkingController:
-    def __init__(self, planner: GaitPlanner, ik: WholeBodyIK, dt: float) -> None:
+    def __init__(self, planner: GaitPlanner, ik: WholeBodyIK, dt: float, wait_for_plans: bool = True) -> None:
         self.planner = planner
+        self.wait_for_plans = wait_for_plans
         self.ik = ik
         self.dt = dt
         self.phase = WalkPhase.STANDING
@@ -84,7 +95,7 @@ class WalkingController:
         self.phase = WalkPhase.STANDING
         self._segment = None
         if self._pending_at is not None:
-            self.planner.result(block=True)  # drain the answer so the next request is not confused with it
+            self.planner.forget()  # the next request is not confused with it, and the stop does not wait for it
         self._pending_at = None
 
     def update(self) -> np.ndarray | None:
@@ -99,8 +110,11 @@ class WalkingController:
             self._request("start", t + PLAN_LEAD_S)
             self.phase = WalkPhase.STARTING
         if self._pending_at is not None and t >= self._pending_at - 1e-9:
-            segment = self.planner.result(block=True)
-            assert segment is not None
+            segment = self.planner.result(block=self._must_wait(t))
+            if segment is None:  # late, in real time: carry on along the current segment
+                if self.phase == WalkPhase.STARTING:
+                    return self._targets.copy()  # stand, the gait clock held, until the first plan comes
+                return self._track(t)
             self._segment = segment
             self._pending_at = None
             if self.phase == WalkPhase.STARTING:
@@ -113,6 +127,17 @@ class WalkingController:
                 self.phase = WalkPhase.STOPPING
             else:
                 self._request("replan", t + PLAN_LEAD_S)
+        return self._track(t)
+
+    def _must_wait(self, t: float) -> bool:
+        """Whether a due plan must be waited for now: always headless; in real time, once the walk would run out."""
+        if self.wait_for_plans:
+            return True
+        segment = self._segment
+        return segment is not None and t >= segment.t_end - RUN_OUT_MARGIN_S
+
+    def _track(self, t: float) -> np.ndarray:
+        """This tick's targets along the current segment; the gait clock moves on a tick."""
         segment = self._segment
         if segment is not None:
             i = segment.index(t)

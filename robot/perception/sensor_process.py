@@ -10,11 +10,10 @@ from __future__ import annotations
 
 import contextlib
 import os
-import pickle
 import sys
 from typing import Protocol
 
-from robot.child_process import PipedChild
+from robot.child_process import PipedChild, child_ends
 from robot.model.world import WorldLayout
 from robot.perception.occupancy import OccupancyGrid
 from robot.perception.suite import SensorOutput, SensorSnapshot, SensorSuite
@@ -101,12 +100,11 @@ def _lower_priority() -> None:
 
 def _serve(request_fd: str, answer_fd: str) -> None:
     _lower_priority()
-    requests = os.fdopen(int(request_fd), "rb")
-    answers = os.fdopen(int(answer_fd), "wb")
+    requests, answers = child_ends(request_fd, answer_fd)
     sensors: InlineSensors | None = None
     while True:
         try:
-            request = pickle.load(requests)
+            request = requests.recv()
         except EOFError:
             break
         try:
@@ -123,8 +121,7 @@ def _serve(request_fd: str, answer_fd: str) -> None:
                 answer = SensorError(f"unknown request {request[0]!r}")
         except Exception as exc:  # the worker decides what a failed frame means
             answer = exc
-        pickle.dump(answer, answers)
-        answers.flush()
+        answers.send(answer)
     if sensors is not None:
         sensors.close()
 

@@ -172,12 +172,12 @@ def test_camera_stream_with_detections_map_and_a_search_from_the_page(page, serv
     # a frame with what is in view boxed on it (where the robot stands after the tests before: not always the mug)
     view = page.wait_for_function(
         "(() => { const c = window.humanoid.camera;"
-        " return c.seq > 10 && c.detections.length ? {fps: c.fps, labels: c.detections.map(d => d.label)} : null;"
+        " return c.seq > 10 && c.detections.length ? {seq: c.seq, labels: c.detections.map(d => d.label)} : null;"
         " })()",
         timeout=60_000,
     ).json_value()
-    # the stream flows (its rate is the perception bench's business: a software-rendered page shows ~5 fps here)
-    assert view["fps"] > 0
+    # the stream flows (its rate is the perception bench's business: a busy machine leaves sensing what is spare)
+    page.wait_for_function(f"window.humanoid.camera.seq > {view['seq']}", timeout=60_000)
     assert set(view["labels"]) <= {"red mug", "blue bottle", "green apple"}  # only the world's objects
     # the camera canvas shows an image, not a blank
     spread = page.evaluate(

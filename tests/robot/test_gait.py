@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import numpy as np
@@ -135,6 +136,17 @@ def test_planner_in_a_child_process_answers_like_the_inline_one(model_path) -> N
         assert replanned is not None and replanned.t_start == pytest.approx(0.3)
         assert np.linalg.norm(replanned.com[0] - start.com[start.index(0.3)]) < 1e-3
         assert child.result(block=False) is None  # nothing outstanding
+        # an answer no longer wanted (an e-stop) is dropped when it comes; the next request gets its own answer
+        child.request("replan", StepCommand(dx=0.03), 0.4)
+        child.forget()
+        child.request("replan", StepCommand(dy=-0.02), 0.5)
+        answer = None
+        deadline = time.monotonic() + 60
+        while answer is None and time.monotonic() < deadline:  # never waits: None until the answer is in
+            answer = child.result(block=False)
+            time.sleep(0.005)
+        assert answer is not None and answer.t_start == pytest.approx(0.5)
+        assert child.result(block=False) is None
     finally:
         child.close()
     assert child._child.process.returncode == 0  # it exits when its pipe closes
@@ -175,3 +187,96 @@ def test_a_walk_after_a_turning_walk_starts_exactly_like_a_first_walk(model_path
         return np.array(out[-len(restart) + 10 :])
 
     assert np.allclose(targets(history + restart), targets(restart), atol=1e-4)
+
+
+class HeldPlanner:
+    """Inline planning whose answers come only when the test lets them through: a busy machine's late planner."""
+
+    def __init__(self, model_path: Path) -> None:
+        self._inline = InlineGaitPlanner(model_path, DT)
+        self.answer = None
+        self.held = True
+        self.waits = 0  # results the walk blocked for
+        self.forgotten = 0
+        self.requested_at: list[float] = []
+
+    def request(self, kind: str, command: StepCommand, t: float) -> None:
+        assert self.answer is None, "one request at a time"
+        self.requested_at.append(t)
+        self._inline.request(kind, command, t)
+        self.answer = self._inline.result(block=True)
+
+    def result(self, block: bool):
+        self.waits += block
+        if self.held and not block:
+            return None
+        answer, self.answer = self.answer, None
+        return answer
+
+    def forget(self) -> None:
+        self.answer = None
+        self.forgotten += 1
+
+    def close(self) -> None:
+        pass
+
+
+def _run(walk: WalkingController, ticks: int) -> list[np.ndarray]:
+    out = []
+    for _ in range(ticks):
+        targets = walk.update()
+        assert targets is not None and np.all(np.isfinite(targets))
+        out.append(targets)
+    return out
+
+
+def test_in_real_time_a_late_plan_does_not_stall_the_walk_until_its_segment_runs_out(model_path) -> None:
+    planner = HeldPlanner(model_path)
+    walk = WalkingController(planner, WholeBodyIK(model_path, DT), DT, wait_for_plans=False)
+    walk.set_step_command(StepCommand(dx=0.03))
+    planner.held = False
+    _run(walk, 60)
+    assert walk.phase == WalkPhase.WALKING
+    planner.held = True  # the planner falls 0.4 s behind: the walk goes on along the segment it has
+    late = _run(walk, 40)
+    assert planner.waits == 0 and planner.answer is not None  # a replan is due and not taken, nothing waited
+    assert np.ptp(np.array(late), axis=0).max() > 0.01  # the legs keep moving
+    asked = len(planner.requested_at)
+    planner.held = False
+    _run(walk, 1)
+    assert len(planner.requested_at) == asked + 1  # taken as soon as it came, and the next one asked for at once
+    assert planner.requested_at[-1] - planner.requested_at[-2] > 0.35
+    planner.held = True  # far behind: once the segment (1 s ahead) is about to end, the walk waits for the plan
+    _run(walk, 150)
+    assert planner.waits >= 1
+    assert walk.phase == WalkPhase.WALKING
+
+
+def test_in_real_time_a_starting_walk_stands_until_its_first_plan_then_starts_as_it_would_have(model_path) -> None:
+    reference = WalkingController(InlineGaitPlanner(model_path, DT), WholeBodyIK(model_path, DT), DT)
+    reference.set_step_command(StepCommand(dx=0.03))
+    expected = _run(reference, 60)
+    planner = HeldPlanner(model_path)
+    walk = WalkingController(planner, WholeBodyIK(model_path, DT), DT, wait_for_plans=False)
+    walk.set_step_command(StepCommand(dx=0.03))
+    held = _run(walk, 30)
+    assert walk.phase == WalkPhase.STARTING and planner.waits == 0
+    assert np.allclose(held, held[0])  # standing still, not stepping off a plan it does not have
+    planner.held = False
+    started = _run(walk, 55)
+    assert np.allclose(started, expected[5:], atol=1e-3)  # the whole start, none of it skipped (IK to 1 mrad)
+
+
+def test_an_estop_while_a_plan_is_outstanding_does_not_wait_for_it(model_path) -> None:
+    planner = HeldPlanner(model_path)
+    walk = WalkingController(planner, WholeBodyIK(model_path, DT), DT, wait_for_plans=False)
+    walk.set_step_command(StepCommand(dx=0.03))
+    planner.held = False
+    _run(walk, 60)
+    planner.held = True
+    _run(walk, 20)  # a replan is outstanding
+    walk.abort()
+    assert planner.forgotten == 1 and planner.waits == 0 and walk.phase == WalkPhase.STANDING
+    planner.held = False
+    _run(walk, 60)  # and the next walk starts from its own plan
+    assert walk.phase == WalkPhase.WALKING
