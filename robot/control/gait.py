@@ -26,6 +26,7 @@ import numpy as np
 import placo
 
 from robot.model import humanoid_v1
+from robot.user_cache import user_cache_dir
 
 # Walk parameters measured to walk this robot in MuJoCo (shared FINDINGS.md): single support 0.3 s, no double
 # support, CoM 0.23 m, foot rise 0.025 m, trunk upright.
@@ -76,8 +77,7 @@ def walk_parameters() -> placo.HumanoidParameters:
 def placo_model_dir() -> Path:
     """Where robots keep their placo model: a per-user cache, not a directory per process, so that a robot process
     killed outright leaves nothing behind."""
-    cache = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(cache) / "humanoid" / "placo"
+    return user_cache_dir("placo")
 
 
 def write_placo_model(directory: Path | None = None) -> Path:

@@ -23,6 +23,8 @@ from pathlib import Path
 import fast_simplification
 import numpy as np
 
+from robot.user_cache import user_cache_dir
+
 log = logging.getLogger(__name__)
 
 # Of each drawn mesh, the smallest share of its triangles that keeps its shape: volume within 1 % and extent within
@@ -37,8 +39,7 @@ _STL_RECORD = np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)), ("att
 
 def mesh_cache_dir() -> Path:
     """A per-user cache shared by every process of the app (the placo model's neighbour)."""
-    cache = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(cache) / "humanoid" / "meshes"
+    return user_cache_dir("meshes")
 
 
 def read_binary_stl(path: Path) -> tuple[np.ndarray, np.ndarray] | None:
