@@ -36,7 +36,7 @@ def status(client, name: str) -> dict | None:
     return None
 
 
-def wait_status(client, name: str, level: str, timeout: float = 6.0) -> dict:
+def wait_status(client, name: str, level: str, timeout: float = 30.0) -> dict:
     return wait_until(lambda: (s := status(client, name)) and s["level_name"] == level and s, timeout=timeout)
 
 

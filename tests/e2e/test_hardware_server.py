@@ -34,7 +34,7 @@ playwright_api = pytest.importorskip("playwright.sync_api")
 KNEE_ID, KNEE_AT_START = 13, 0.3  # r_knee, bent as it was left when powered down
 
 
-def wait_until(predicate, timeout: float = 10.0):
+def wait_until(predicate, timeout: float = 30.0):  # generous: a loaded machine
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         if value := predicate():

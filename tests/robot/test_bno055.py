@@ -15,7 +15,7 @@ from robot.sensors.bno055_emulator import Bno055Emulator
 from robot.sensors.imu import quat_from_rpy, rpy_from_quat
 
 
-def wait(predicate, timeout: float = 10.0):
+def wait(predicate, timeout: float = 30.0):  # generous: a loaded machine
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         if value := predicate():

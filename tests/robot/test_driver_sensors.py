@@ -29,7 +29,7 @@ class StillCamera:
         return self.image
 
 
-def wait(predicate, timeout: float = 10.0):
+def wait(predicate, timeout: float = 30.0):  # generous: a loaded machine
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         if value := predicate():

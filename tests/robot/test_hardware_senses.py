@@ -24,7 +24,7 @@ from robot.sensors.imu import quat_from_rpy
 CONFIG = dataclasses.replace(default_config(), reply_margin_ms=100.0, imu="opencr", feet="fsr")
 
 
-def wait(predicate, timeout: float = 8.0):
+def wait(predicate, timeout: float = 30.0):  # generous: a loaded machine
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         if value := predicate():

@@ -22,7 +22,7 @@ from robot.model import humanoid_v1
 CONFIG = dataclasses.replace(default_config(), reply_margin_ms=100.0)
 
 
-def wait(predicate, timeout: float = 5.0):
+def wait(predicate, timeout: float = 30.0):  # generous: a loaded machine
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         if value := predicate():
@@ -93,7 +93,7 @@ def test_torque_stays_off_until_enabled_then_postures_move_the_servos(robot, emu
     wait(lambda: all(torque_on(emulator)))
     assert robot.submit(SetPosture(Posture.STAND)).accepted
     knee = humanoid_v1.stand_posture()["r_knee"]
-    wait(lambda: abs(emulator.position_rad(sid("r_knee")) - knee) < 0.02, timeout=8)
+    wait(lambda: abs(emulator.position_rad(sid("r_knee")) - knee) < 0.02)
     # the mirror draws the measured pose
     state = robot.state()
     assert len(state.qpos) == robot.body.scene.model.nq and state.torque_enabled
@@ -139,7 +139,7 @@ def test_estop_crouches_then_turns_torque_off(robot, emulator) -> None:
     wait(lambda: robot.state().mode == Mode.ESTOP)
     crouch_knee = humanoid_v1.stand_posture(humanoid_v1.CROUCH_KNEE_BEND)["l_knee"]
     wait(lambda: emulator.read(sid("l_knee"), ct.GOAL_POSITION) > ct.POSITION_CENTRE + 100)  # bending
-    wait(lambda: not robot.state().torque_enabled, timeout=4)
+    wait(lambda: not robot.state().torque_enabled)
     assert not any(torque_on(emulator))
     assert crouch_knee > 1.0
     assert robot.submit(SetTorque(True)).refusal == Refusal.ESTOP_LATCHED
@@ -215,7 +215,7 @@ def test_a_stalled_control_loop_is_stopped_by_the_servos_then_crouches_and_turns
         latched = next(e for e in robot.recent_events() if e.kind == "estop/latched")
         assert latched.data["source"] == "watchdog" and "stalled" in latched.data["reason"]
         wait(lambda: emulator.read(sid("l_knee"), ct.GOAL_POSITION) > ct.POSITION_CENTRE + 100)  # crouching again
-        wait(lambda: not robot.state().torque_enabled, timeout=4)
+        wait(lambda: not robot.state().torque_enabled)
         assert not any(torque_on(emulator))
     finally:
         robot.stop()
@@ -245,7 +245,7 @@ def test_a_robot_process_started_on_servos_left_holding_takes_them_over_then_mak
         assert not any(e.kind == "hardware/setup" for e in second.recent_events())
         wait(lambda: second.state().estop_latched)
         wait(lambda: emulator.read(sid("l_knee"), ct.GOAL_POSITION) > ct.POSITION_CENTRE + 100)  # crouching
-        wait(lambda: not second.state().torque_enabled, timeout=4)
+        wait(lambda: not second.state().torque_enabled)
         assert not any(torque_on(emulator))
     finally:
         second.stop()

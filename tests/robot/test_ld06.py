@@ -28,7 +28,7 @@ from robot.sensors.ld06_protocol import (
 )
 
 
-def wait(predicate, timeout: float = 10.0):
+def wait(predicate, timeout: float = 30.0):  # generous: a loaded machine
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         if value := predicate():

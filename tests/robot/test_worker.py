@@ -20,7 +20,7 @@ from robot.interface import (
 )
 
 
-def wait_event(subscription, kind: str, timeout: float = 5.0):
+def wait_event(subscription, kind: str, timeout: float = 30.0):  # generous: a loaded machine
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         event = subscription.get(timeout=0.05)
