@@ -230,13 +230,19 @@ def _run(walk: WalkingController, ticks: int) -> list[np.ndarray]:
     return out
 
 
-def test_in_real_time_a_late_plan_does_not_stall_the_walk_until_its_segment_runs_out(model_path) -> None:
+def _walking_in_real_time(model_path: Path) -> tuple[HeldPlanner, WalkingController]:
+    """A real-time walk under way (0.6 s in), its planner answering on time so far."""
     planner = HeldPlanner(model_path)
     walk = WalkingController(planner, WholeBodyIK(model_path, DT), DT, wait_for_plans=False)
     walk.set_step_command(StepCommand(dx=0.03))
     planner.held = False
     _run(walk, 60)
     assert walk.phase == WalkPhase.WALKING
+    return planner, walk
+
+
+def test_in_real_time_a_late_plan_does_not_stall_the_walk_until_its_segment_runs_out(model_path) -> None:
+    planner, walk = _walking_in_real_time(model_path)
     planner.held = True  # the planner falls 0.4 s behind: the walk goes on along the segment it has
     late = _run(walk, 40)
     assert planner.waits == 0 and planner.answer is not None  # a replan is due and not taken, nothing waited
@@ -268,11 +274,7 @@ def test_in_real_time_a_starting_walk_stands_until_its_first_plan_then_starts_as
 
 
 def test_an_estop_while_a_plan_is_outstanding_does_not_wait_for_it(model_path) -> None:
-    planner = HeldPlanner(model_path)
-    walk = WalkingController(planner, WholeBodyIK(model_path, DT), DT, wait_for_plans=False)
-    walk.set_step_command(StepCommand(dx=0.03))
-    planner.held = False
-    _run(walk, 60)
+    planner, walk = _walking_in_real_time(model_path)
     planner.held = True
     _run(walk, 20)  # a replan is outstanding
     walk.abort()
