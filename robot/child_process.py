@@ -46,16 +46,18 @@ class PipedChild:
         return self._answers.poll(0)
 
     def close(self) -> None:
+        """Tell the child to exit and drop what it has yet to answer (an answer nobody will read, say a walking plan
+        an e-stop forgot, must not keep the child blocked on a full pipe)."""
         with contextlib.suppress(OSError):
             self._requests.close()
+        self._answers.close()
         try:
             self.process.wait(timeout=5)
         except subprocess.TimeoutExpired:
             self.process.kill()
-        self._answers.close()
 
 
 def child_ends(request_fd: str, answer_fd: str) -> tuple[Connection, Connection]:
-    """The child's side: where its requests come from and where its answers go (`recv` raises EOFError when the
-    parent closes)."""
+    """The child's side: where its requests come from and where its answers go (`recv` raises EOFError, and `send`
+    BrokenPipeError, once the parent has closed)."""
     return Connection(int(request_fd), writable=False), Connection(int(answer_fd), readable=False)

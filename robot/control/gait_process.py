@@ -127,7 +127,10 @@ def _serve(model_path: str, dt: str, request_fd: str, answer_fd: str) -> None:
             answer: object = _answer(core, kind, command, t)
         except Exception as exc:  # the controller decides what a failed plan means
             answer = exc
-        answers.send(answer)
+        try:
+            answers.send(answer)
+        except BrokenPipeError:  # the parent closed: nobody wants it
+            return
 
 
 if __name__ == "__main__":

@@ -121,7 +121,10 @@ def _serve(request_fd: str, answer_fd: str) -> None:
                 answer = SensorError(f"unknown request {request[0]!r}")
         except Exception as exc:  # the worker decides what a failed frame means
             answer = exc
-        answers.send(answer)
+        try:
+            answers.send(answer)
+        except BrokenPipeError:  # the parent closed: nobody wants it
+            break
     if sensors is not None:
         sensors.close()
 
