@@ -22,11 +22,14 @@ from robot.interface import (
 
 def wait_event(subscription, kind: str, timeout: float = 30.0):  # generous: a loaded machine
     deadline = time.monotonic() + timeout
+    seen: list[str] = []
     while time.monotonic() < deadline:
         event = subscription.get(timeout=0.05)
         if event is not None and event.kind == kind:
             return event
-    raise AssertionError(f"no {kind} event within {timeout} s")
+        if event is not None:
+            seen.append(f"{event.kind} at {event.sim_time_s:.2f} s: {event.message[:80]}")
+    raise AssertionError(f"no {kind} event within {timeout} s; seen instead: {seen[:20]}")
 
 
 def plan_done(command_id: int):
