@@ -56,7 +56,8 @@ def test_imu_and_feet_reach_the_measurements_and_diagnostics(robot, emulator) ->
     emulator.sense_imu(quat_from_rpy(math.radians(12), 0.0, 0.0), [0.2, 0.0, 0.0], [0.0, 2.0, 9.6])
     emulator.sense_foot(fsr.LEFT_FSR_ID, [20.0, 20.0, 15.0, 15.0])
     emulator.sense_foot(fsr.RIGHT_FSR_ID, [10.0, 10.0, 5.0, 5.0])
-    wait(lambda: abs(robot.state().tilt_deg - 12.0) < 0.5)
+    # the three were set one after another; a tick may read between them, so wait for one that saw them all
+    wait(lambda: abs(robot.state().tilt_deg - 12.0) < 0.5 and robot.body.latest().foot_forces[1][0] > 0)
     measured = robot.body.latest()
     assert np.allclose(measured.foot_forces, [[20, 20, 15, 15], [10, 10, 5, 5]], atol=1e-3)
     assert measured.imu_gyro[0] == pytest.approx(0.2, abs=0.01) and measured.imu_stamp_s is not None
