@@ -9,7 +9,14 @@ from pathlib import Path
 import numpy as np
 import placo
 
-from robot.control.gait import COM_HEIGHT_M, FEET_SPACING_M, GaitSegment, load_placo_robot, put_at_walk_start
+from robot.control.gait import (
+    COM_HEIGHT_M,
+    FEET_SPACING_M,
+    GaitSegment,
+    load_placo_robot,
+    put_at_walk_start,
+    reach_initial_pose,
+)
 from robot.model import humanoid_v1
 
 _SIDE_NAMES = {1: "left", 2: "right"}
@@ -47,7 +54,7 @@ class WholeBodyIK:
         for name, value in self._upper.items():  # a walk starts with the arms where they are held
             self.robot.set_joint(name, value)
         self.robot.update_kinematics()
-        self.tasks.reach_initial_pose(np.eye(4), FEET_SPACING_M, COM_HEIGHT_M, 0.0)
+        reach_initial_pose(self.tasks, FEET_SPACING_M, COM_HEIGHT_M)
         return self.joint_targets()
 
     def track(self, segment: GaitSegment, index: int) -> np.ndarray:
