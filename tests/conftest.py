@@ -26,6 +26,24 @@ from robot.model.scene import build_scene
 from robot.model.world import WorldLayout, generate_world
 from robot.sim.backend import MujocoSimBackend
 from robot.worker import RobotWorker
+from tests.support import file_order
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addoption(
+        "--record-file-durations",
+        action="store_true",
+        help=f"write each test file's seconds to {file_order.DURATIONS_FILE.name} (the order `make test` runs them)",
+    )
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    if config.getoption("record_file_durations"):
+        config.pluginmanager.register(file_order.DurationRecorder(), "file-durations")
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    items[:] = file_order.longest_files_first(items, file_order.load_durations())
 
 
 def _give_back_freed_memory() -> None:

@@ -55,12 +55,12 @@ def test_teleop_walks_forward_and_the_deadman_stops_it(make_worker) -> None:
     deadman = wait_event(events, "teleop/deadman")
     # never before 300 ms of silence (how soon after is `humanoid bench` business: a loaded machine delays a tick)
     assert 0.3 <= deadman.wall_time_s - last_input < 1.0
-    ended = wait_event(events, "teleop/ended", timeout=5.0)
+    ended = wait_event(events, "teleop/ended", timeout=30.0)
     # decelerate, two steps in place, stand: no walking on. Alone 2.1-2.35 s of simulated time (6 runs); once, under
-    # the suite's load, 3.2 s (the gait planner's process answers the stop a few periods late); walking out the old
-    # 8-step plan took about 5 s.
-    assert ended.sim_time_s - deadman.sim_time_s < 3.5
-    assert worker.wait_for(lambda s: s.mode == Mode.IDLE, 1.0)
+    # the suite's load, 3.2 s (the gait planner's process answers the stop a few periods late, and a late plan is
+    # walked along the current one, up to 1 s ahead); walking out the old 8-step plan took about 5 s.
+    assert ended.sim_time_s - deadman.sim_time_s < 4.5
+    assert worker.wait_for(lambda s: s.mode == Mode.IDLE, 30.0)
     state = worker.state()
     assert state.mode == Mode.IDLE and state.locomotion.phase == "standing" and not state.fallen
     assert state.locomotion.footsteps == ()
