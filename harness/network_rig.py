@@ -8,6 +8,7 @@ trips, e-stop presses, driving while the link is cut) and what the robot's side 
 
 from __future__ import annotations
 
+import collections
 import json
 import os
 import queue
@@ -93,6 +94,7 @@ class EventWatch:
     def __init__(self, process: subprocess.Popen) -> None:
         self.process = process
         self.incidents: list[str] = []  # the robot process died or restarted, the robot fell
+        self.recent: collections.deque[str] = collections.deque(maxlen=30)  # (said when a run fails)
         self._events: queue.Queue[dict[str, Any]] = queue.Queue()
         first = process.stdout.readline()  # type: ignore[union-attr]
         if not first or not json.loads(first).get("ready"):
@@ -103,6 +105,7 @@ class EventWatch:
         for line in self.process.stdout:  # type: ignore[union-attr]
             message = json.loads(line)
             if "event" in message:
+                self.recent.append(f"{message['event']['wall_time_s']:.3f} {message['event']['kind']}")
                 self._events.put(message["event"])
                 if message["event"]["kind"] in INCIDENTS:
                     self.incidents.append(f"{message['event']['kind']}: {message['event']['message']}")
@@ -245,18 +248,20 @@ def _driving(watch: EventWatch, since_s: float) -> float:
 def cut_while_driving(link: ImpairedLink, operator: FarEnd, watch: EventWatch, cuts: int) -> dict[str, Any]:
     """Drive by teleop; `cuts` times, once the robot drives, cut the link and time the robot's stop."""
     driver = operator.start("drive")
-    delays, kinds, held = [], [], []
+    delays, kinds, held, cuts_at = [], [], [], []
     failure = None
     try:
         since = time.time()
         for _ in range(cuts):
             _driving(watch, since)
             cut_s = link.cut()
+            cuts_at.append(round(cut_s, 3))
             stopping = watch.next(STOP_KINDS, cut_s, EVENT_TIMEOUT_S)
             delays.append(None if stopping is None else round((stopping["wall_time_s"] - cut_s) * 1e3, 1))
             kinds.append(None if stopping is None else stopping["kind"])
             # (teleop that comes back before the walk has ended resumes it without a "teleop/started")
-            watch.next({"teleop/ended"}, cut_s, EVENT_TIMEOUT_S)
+            if watch.next({"teleop/ended"}, cut_s, EVENT_TIMEOUT_S) is None:
+                raise RuntimeError(f"the walk did not end within {EVENT_TIMEOUT_S:.0f} s of the cut")
             time.sleep(max(0.0, cut_s + CUT_HOLD_S - time.time()))
             since = link.restore()
             held.append(round(since - cut_s, 2))
@@ -266,7 +271,8 @@ def cut_while_driving(link: ImpairedLink, operator: FarEnd, watch: EventWatch, c
         drive = operator.stop("drive", driver)
     if failure is not None:
         raise RuntimeError(
-            f"{failure}; the driver: {drive}; its log: {operator.log('drive')}; incidents: {watch.incidents}"
+            f"{failure}; the driver: {drive}; its log: {operator.log('drive')}; incidents: {watch.incidents}; "
+            f"cuts at {cuts_at}, stopping after {delays} ms ({kinds}); the last events: {list(watch.recent)}"
         ) from failure
     measured = [d for d in delays if d is not None]
     return {

@@ -208,7 +208,7 @@ class WorkerProcess:
         self._alive = False
         self._last_heard = time.monotonic()
         self._freeze = FreezeWatch()
-        self._taps: list[Callable[[bytes], None]] = []
+        self._taps: list[Callable[[str, bytes], None]] = []
 
     # lifecycle -------------------------------------------------------------------------------------------------
 
@@ -396,10 +396,10 @@ class WorkerProcess:
 
     # internals -------------------------------------------------------------------------------------------------
 
-    def add_tap(self, tap: Callable[[bytes], None]) -> None:
-        """`tap(raw)` gets every state and sensor-feed message as it came from the robot process, still pickled
-        (another process, the 3D mirror's, reads them without this one encoding them again). Called on the reader
-        thread: it must not block."""
+    def add_tap(self, tap: Callable[[str, bytes], None]) -> None:
+        """`tap(kind, raw)` gets every state and sensor-feed message ("state" or "feed") as it came from the robot
+        process, still pickled (another process, the 3D mirror's, reads them without this one encoding them again,
+        and decodes only the states it draws). Called on the reader thread: it must not block."""
         self._taps.append(tap)
 
     def _read(self) -> None:
@@ -414,7 +414,7 @@ class WorkerProcess:
             kind = message[0]
             if kind in ("state", "feed"):
                 for tap in self._taps:
-                    tap(raw)
+                    tap(kind, raw)
             if kind == "state":
                 self._board.publish(message[1])
             elif kind == "event":  # numbered here: a restarted robot numbers from 1 again

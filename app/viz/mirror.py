@@ -232,6 +232,10 @@ class SceneMirror:
 
     def _run(self) -> None:
         while not self._stop.wait(self._period):
+            if not self.server.get_clients():
+                # Nobody watches: nothing to draw (and no state to decode). A viewer who comes gets the scene as last
+                # drawn, then the robot where it is now within one period.
+                continue
             try:
                 self.update_once()
             except Exception:  # a viewer glitch must never take the mirror down for good

@@ -9,9 +9,13 @@ Data flow: the robot process's state and sensor-feed messages reach this process
 the web server does not encode them again). The views' gates (`app.viz.scene_gate`) run here too, so the pages' 3D
 traffic never touches the web server; a click in a 3D view goes back with who made it, for the web server to
 check and turn into a command.
-Wire protocol (one duplex pipe, pickles): parent -> child: raw ("state", ...) / ("feed", ...) messages,
-("revoke", login), ("stop",); child -> parent: ("ready", {profile: port}), ("updates", {profile: n}),
-("click", SceneGrant, origin, direction), ("fatal", text).
+Wire protocol (one duplex pipe): parent -> child: a tag byte, then a pickle: `STATE` + the raw ("state", ...)
+message, `FEED` + the raw ("feed", ...) message, `CONTROL` + ("revoke", login) or ("stop",); child -> parent
+(pickles): ("ready", {profile: port}), ("updates", {profile: n}), ("click", SceneGrant, origin, direction),
+("fatal", text).
+
+A state is decoded only when a mirror draws it: states come at the robot's rate, a mirror draws at its own rate and
+only while someone watches its view, and decoding every one cost this process a third of a core with no viewer.
 """
 
 from __future__ import annotations
@@ -37,6 +41,8 @@ log = logging.getLogger(__name__)
 STARTUP_TIMEOUT_S = 120.0
 UPDATES_PERIOD_S = 1.0
 MIRROR_NICE = 5  # below the web server and the robot: viewers wait, the e-stop does not
+STATE, FEED, CONTROL = b"s", b"f", b"c"  # what follows a message's tag byte
+_TAGS = {"state": STATE, "feed": FEED}
 
 
 @dataclass
@@ -83,7 +89,7 @@ class MirrorProcess:
         child_conn.close()
         self._conn = parent_conn
         # the state it starts from (later ones come through the tap)
-        parent_conn.send_bytes(pickle.dumps(("state", self._worker.state())))
+        parent_conn.send_bytes(STATE + pickle.dumps(("state", self._worker.state())))
         if not parent_conn.poll(STARTUP_TIMEOUT_S):
             self._process.kill()
             raise RuntimeError(f"the 3D mirrors did not start within {STARTUP_TIMEOUT_S:.0f} s")
@@ -111,14 +117,17 @@ class MirrorProcess:
         self._process = None
 
     def _send(self, message: tuple) -> None:
-        self._forward(pickle.dumps(message))
+        self._send_tagged(CONTROL + pickle.dumps(message))
 
-    def _forward(self, raw: bytes) -> None:
+    def _forward(self, kind: str, raw: bytes) -> None:
+        self._send_tagged(_TAGS[kind] + raw)
+
+    def _send_tagged(self, tagged: bytes) -> None:
         if self._process is None:
             return
         try:
             with self._send_lock:
-                self._conn.send_bytes(raw)  # type: ignore[union-attr]
+                self._conn.send_bytes(tagged)  # type: ignore[union-attr]
         except OSError:  # the mirrors' process is gone: the robot and the web server go on without it
             pass
 
@@ -139,10 +148,13 @@ class MirrorProcess:
 
 
 class PipedPort:
-    """The part of `RobotPort` a mirror reads, fed from the pipe."""
+    """The part of `RobotPort` a mirror reads, fed from the pipe: the newest state is kept as it came, and decoded
+    when a mirror asks for it (once, however many mirrors ask)."""
 
     def __init__(self, description: RobotDescription) -> None:
         self._description = description
+        self._lock = threading.Lock()
+        self._raw_state: memoryview | None = None
         self._state: RobotState | None = None
         self._feed = SensorFeed()
 
@@ -150,17 +162,27 @@ class PipedPort:
         return self._description
 
     def state(self) -> RobotState:
-        assert self._state is not None
-        return self._state
+        with self._lock:
+            if self._raw_state is not None:
+                self._state = pickle.loads(self._raw_state)[1]
+                self._raw_state = None
+            assert self._state is not None
+            return self._state
 
     def sensor_feed(self) -> SensorFeed:
         return self._feed
 
-    def take(self, message: tuple) -> None:
-        if message[0] == "state":
-            self._state = message[1]
-        elif message[0] == "feed":
-            self._feed = merge_feed(self._feed, message[1])
+    def take(self, tagged: bytes) -> tuple | None:
+        """Take one tagged message from the pipe; returns it decoded if it is a control message."""
+        tag, body = tagged[:1], memoryview(tagged)[1:]
+        if tag == STATE:
+            with self._lock:
+                self._raw_state = body
+        elif tag == FEED:
+            self._feed = merge_feed(self._feed, pickle.loads(body)[1])
+        elif tag == CONTROL:
+            return pickle.loads(body)
+        return None
 
 
 def mirror_main(
@@ -186,7 +208,7 @@ def mirror_main(
 
         tokens = SceneTokens(secret)
         port = PipedPort(description)
-        port.take(pickle.loads(conn.recv_bytes()))
+        port.take(conn.recv_bytes())
         mirrors, gates = open_views(
             port,
             host,
@@ -212,17 +234,17 @@ def mirror_main(
     try:
         while True:
             try:
-                message = pickle.loads(conn.recv_bytes())
+                message = port.take(conn.recv_bytes())
             except (EOFError, OSError):  # the web server is gone
                 break
+            if message is None:
+                continue
             if message[0] == "stop":
                 break
             if message[0] == "revoke":
                 tokens.revoke(message[1])
                 for gate in gates.values():
                     gate.revoke(message[1])
-                continue
-            port.take(message)
     finally:
         stop.set()
         for gate in gates.values():

@@ -27,10 +27,19 @@ def _connect(url: str) -> websockets.asyncio.client.connect:
     return websockets.connect(url, max_size=None, subprotocols=[f"viser-v{viser.__version__}"])
 
 
+def camera_message(origin: Vector = (-3.2, -2.8, 3.0)) -> bytes:
+    """The camera message a browser sends as soon as its view opens: viser counts a viewer from it."""
+    camera = ViewerCameraMessage(
+        (1.0, 0.0, 0.0, 0.0), origin, 1.0, 0.01, 100.0, 480, 640, (0.0, 0.0, 0.0), (0.0, 0.0, 1.0)
+    )
+    return msgspec.msgpack.encode(camera.as_serializable_dict())
+
+
 async def scene_bytes(url: str, seconds: float) -> int:
     """What a viewer's browser is sent in its first `seconds` (the scene, then its updates)."""
     received = 0
     async with _connect(url) as viewer:
+        await viewer.send(camera_message())
         deadline = time.monotonic() + seconds
         while (left := deadline - time.monotonic()) > 0:
             try:
@@ -42,14 +51,11 @@ async def scene_bytes(url: str, seconds: float) -> int:
 
 async def shift_click(url: str, origin: Vector, direction: Vector) -> None:
     """What a viewer's browser sends for a shift+click in the 3D view, then stays a moment."""
-    camera = ViewerCameraMessage(
-        (1.0, 0.0, 0.0, 0.0), origin, 1.0, 0.01, 100.0, 480, 640, (0.0, 0.0, 0.0), (0.0, 0.0, 1.0)
-    )
     click = ScenePointerMessage("click", origin, direction, ((0.5, 0.5),), "shift")
     async with _connect(url) as viewer:
         # viser counts a viewer as connected (and takes its clicks) from its first camera message
-        for message in (camera, click):
-            await viewer.send(msgspec.msgpack.encode(message.as_serializable_dict()))
+        await viewer.send(camera_message(origin))
+        await viewer.send(msgspec.msgpack.encode(click.as_serializable_dict()))
         deadline = time.monotonic() + 1.0
         while (left := deadline - time.monotonic()) > 0:
             try:
