@@ -14,7 +14,6 @@ from concurrent.futures import ThreadPoolExecutor
 import httpx
 import psutil
 import pytest
-import viser
 import websockets
 
 from app.auth.roles import Principal, Role
@@ -24,7 +23,7 @@ from harness.server import free_port
 from robot.interface import EStop, ReleaseEStop, StopTeleop, Teleop
 from robot.process import WorkerProcess
 from tests.app.test_api import wait_until
-from tests.support.scene_viewer import camera_message, scene_bytes, shift_click, view_url
+from tests.support.scene_viewer import camera_message, connect_view, scene_bytes, shift_click, view_url
 
 
 @contextlib.contextmanager
@@ -34,7 +33,7 @@ def watching(url: str) -> Iterator[list[int]]:
     received, leave = [0], threading.Event()
 
     async def view() -> None:
-        async with websockets.connect(url, max_size=None, subprotocols=[f"viser-v{viser.__version__}"]) as viewer:
+        async with connect_view(url) as viewer:
             await viewer.send(camera_message())
             while not leave.is_set():
                 with contextlib.suppress(TimeoutError):

@@ -23,7 +23,7 @@ def view_url(port: int, token: str, host: str = "127.0.0.1") -> str:
     return f"ws://{host}:{port}/s/{token}"
 
 
-def _connect(url: str) -> websockets.asyncio.client.connect:
+def connect_view(url: str) -> websockets.asyncio.client.connect:
     return websockets.connect(url, max_size=None, subprotocols=[f"viser-v{viser.__version__}"])
 
 
@@ -38,7 +38,7 @@ def camera_message(origin: Vector = (-3.2, -2.8, 3.0)) -> bytes:
 async def scene_bytes(url: str, seconds: float) -> int:
     """What a viewer's browser is sent in its first `seconds` (the scene, then its updates)."""
     received = 0
-    async with _connect(url) as viewer:
+    async with connect_view(url) as viewer:
         await viewer.send(camera_message())
         deadline = time.monotonic() + seconds
         while (left := deadline - time.monotonic()) > 0:
@@ -52,7 +52,7 @@ async def scene_bytes(url: str, seconds: float) -> int:
 async def shift_click(url: str, origin: Vector, direction: Vector) -> None:
     """What a viewer's browser sends for a shift+click in the 3D view, then stays a moment."""
     click = ScenePointerMessage("click", origin, direction, ((0.5, 0.5),), "shift")
-    async with _connect(url) as viewer:
+    async with connect_view(url) as viewer:
         # viser counts a viewer as connected (and takes its clicks) from its first camera message
         await viewer.send(camera_message(origin))
         await viewer.send(msgspec.msgpack.encode(click.as_serializable_dict()))
