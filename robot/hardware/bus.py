@@ -24,13 +24,14 @@ import numpy as np
 from dynamixel_sdk import COMM_RX_CORRUPT, COMM_SUCCESS, GroupSyncRead, GroupSyncWrite, PacketHandler, PortHandler
 
 from robot.hardware import control_table as ct
-from robot.hardware.config import HardwareConfig
+from robot.hardware.config import HardwareConfig, JointServo
 from robot.hardware.xm430 import HardwareError
 
 log = logging.getLogger(__name__)
 
 LOST_AFTER_FAILED_READS = 3
 PING_ATTEMPTS = 3
+LATE_REPLY_WAIT_S = 0.05  # after a missed reply: how long to let it arrive late before dropping it
 FAST = (ct.PRESENT_CURRENT.address, 10)  # current (2), velocity (4), position (4): every tick
 POSITION_CONTROL_MODE = 3
 SLOW_ERRORS = (ct.HARDWARE_ERROR_STATUS.address, 1)
@@ -202,13 +203,30 @@ class DynamixelBus:
                 model, result, _ = self.packets.ping(self.port, j.servo_id)
                 if result == COMM_SUCCESS:
                     break
+                self._drop_late_reply()
             if result != COMM_SUCCESS:
                 out.append(ServoInfo(j.joint, j.servo_id, None))
                 continue
-            firmware, _, _ = self.packets.read1ByteTxRx(self.port, j.servo_id, ct.FIRMWARE_VERSION.address)
-            errors, _, _ = self.packets.read1ByteTxRx(self.port, j.servo_id, ct.HARDWARE_ERROR_STATUS.address)
+            firmware = self._read_byte(j, ct.FIRMWARE_VERSION)
+            errors = self._read_byte(j, ct.HARDWARE_ERROR_STATUS)
             out.append(ServoInfo(j.joint, j.servo_id, model, firmware, errors))
         return out
+
+    def _read_byte(self, joint: JointServo, field: ct.Field) -> int:
+        """One byte of a servo's control table, asked again if the reply is lost (a servo that answered its ping
+        is there); BusError if it never comes."""
+        for _ in range(PING_ATTEMPTS):
+            value, result, _ = self.packets.read1ByteTxRx(self.port, joint.servo_id, field.address)
+            if result == COMM_SUCCESS:
+                return value
+            self._drop_late_reply()
+        raise BusError(f"servo {joint.servo_id} ({joint.joint}): {self.packets.getTxRxResult(result)}")
+
+    def _drop_late_reply(self) -> None:
+        """A reply that missed its time may still come, and the next request would take it for its own (a
+        firmware version read as a hardware error): let it arrive, then drop it."""
+        time.sleep(LATE_REPLY_WAIT_S)
+        self.port.clearPort()
 
     def prepare(self) -> list[str]:
         """Torque off, then each servo in position control with no return delay (EEPROM: written only where it
@@ -217,9 +235,7 @@ class DynamixelBus:
         changes = []
         for j in self.joints:
             for field, wanted in ((ct.OPERATING_MODE, POSITION_CONTROL_MODE), (ct.RETURN_DELAY_TIME, 0)):
-                value, result, _ = self.packets.read1ByteTxRx(self.port, j.servo_id, field.address)
-                if result != COMM_SUCCESS:
-                    raise BusError(f"servo {j.servo_id} ({j.joint}): {self.packets.getTxRxResult(result)}")
+                value = self._read_byte(j, field)
                 if value != wanted:
                     result, error = self.packets.write1ByteTxRx(self.port, j.servo_id, field.address, wanted)
                     if result != COMM_SUCCESS or error & 0x7F:

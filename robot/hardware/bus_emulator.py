@@ -27,7 +27,7 @@ from multiprocessing.connection import Connection
 from typing import Any
 
 from robot.hardware import control_table as ct
-from robot.hardware.emulated_faults import ServoFaults
+from robot.hardware.emulated_faults import LATE_REPLY_S, ServoFaults
 from robot.hardware.protocol2 import (
     ALERT_BIT,
     BROADCAST_ID,
@@ -324,6 +324,9 @@ class EmulatedBus:
             return []
         if self.wire_time:
             time.sleep(servo.return_delay_s)
+        if faults.late_replies > 0:
+            faults.late_replies -= 1
+            time.sleep(LATE_REPLY_S)
         packet = status(servo.servo_id, servo.error_byte(error), params)
         if faults.corrupt_replies > 0:
             faults.corrupt_replies -= 1
@@ -491,7 +494,7 @@ class BusEmulator:
     # what tests do to the servos ---------------------------------------------------------------------------------
 
     def set_fault(self, servo_id: int, **faults: Any) -> None:
-        """dead=True, drop_replies=n, corrupt_replies=n (see ServoFaults)."""
+        """dead=True, drop_replies=n, corrupt_replies=n, late_replies=n (see ServoFaults)."""
         for name, value in faults.items():
             self._call("fault", servo_id, name, value)
 

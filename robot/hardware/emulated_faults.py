@@ -10,3 +10,7 @@ class ServoFaults:
     dead: bool = False  # answers nothing at all
     drop_replies: int = 0  # the next n replies are not sent (the master times out)
     corrupt_replies: int = 0  # the next n replies carry a wrong CRC
+    late_replies: int = 0  # the next n replies come LATE_REPLY_S after the master stopped waiting for them
+
+
+LATE_REPLY_S = 0.02  # a slow USB adapter or a loaded host: past the packet timeout, before the next request ends
