@@ -69,7 +69,7 @@ def layout() -> WorldLayout:
 
 @pytest.fixture(scope="session")
 def scene_model(layout: WorldLayout) -> mujoco.MjModel:
-    return build_scene(layout)
+    return build_scene(layout, drawn=False)  # as the robot's physics builds it
 
 
 @pytest.fixture

@@ -82,7 +82,7 @@ class HeadController:
 @functools.cache
 def _head_axes() -> tuple[np.ndarray, np.ndarray]:
     """Positions of the pan and tilt axes in the trunk frame, from the model at zero pose."""
-    model = humanoid_v1.build_robot_spec().compile()
+    model = humanoid_v1.remove_drawn_meshes(humanoid_v1.build_robot_spec()).compile()
     data = mujoco.MjData(model)
     mujoco.mj_kinematics(model, data)
     trunk = model.body(humanoid_v1.TRUNK_BODY).id

@@ -8,6 +8,7 @@ import math
 import mujoco
 
 from robot.model import humanoid_v1, op3
+from robot.model.scene_cache import cached_scene_xml
 from robot.model.world import ROOM_X, ROOM_Y, Box, WorldLayout, WorldObject
 
 PHYSICS_TIMESTEP_S = 0.002  # 500 Hz
@@ -100,9 +101,12 @@ def _add_object(spec: mujoco.MjSpec, obj: WorldObject) -> None:
         )
 
 
-def build_scene_spec(layout: WorldLayout) -> mujoco.MjSpec:
-    """humanoid_v1 standing at the layout's start pose in its apartment."""
+def build_scene_spec(layout: WorldLayout, drawn: bool = True) -> mujoco.MjSpec:
+    """humanoid_v1 standing at the layout's start pose in its apartment; without the robot's detailed meshes
+    unless `drawn` (see `humanoid_v1.remove_drawn_meshes`)."""
     spec = humanoid_v1.build_robot_spec()
+    if not drawn:
+        humanoid_v1.remove_drawn_meshes(spec)
     spec.modelname = f"{humanoid_v1.MODEL_NAME}_apartment_seed{layout.seed}"
     spec.option.timestep = PHYSICS_TIMESTEP_S
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
@@ -137,15 +141,23 @@ def build_scene_spec(layout: WorldLayout) -> mujoco.MjSpec:
     return spec
 
 
-def build_scene(layout: WorldLayout) -> mujoco.MjModel:
-    return build_scene_spec(layout).compile()
+def build_scene(layout: WorldLayout, drawn: bool = True) -> mujoco.MjModel:
+    """The scene compiled: `drawn` for what renders it (cameras, views), not for physics alone."""
+    return build_scene_spec(layout, drawn).compile()
 
 
 @functools.lru_cache(maxsize=4)
 def scene_xml(layout: WorldLayout) -> str:
-    """The scene as one MJCF string that compiles anywhere on this machine (mesh paths made absolute). Kept: writing
-    it compiles the model with its 355k-triangle drawn meshes (short-lived allocations, ~0.2 s), and every
-    session a server opens describes the same robot in the same world."""
-    spec = build_scene_spec(layout)
-    spec.meshdir = str(op3.op3_asset_dir() / "assets")
-    return spec.to_xml()
+    """The scene as one MJCF string that compiles anywhere on this machine (mesh paths made absolute). Kept, in this
+    process and in the user's cache (see scene_cache): writing it compiles the model with the robot's drawn meshes,
+    and every session a server opens describes the same robot in the same world."""
+    assets = op3.op3_asset_dir()
+    packaged = (assets / "op3.xml").stat()  # a reinstalled package writes its files anew
+
+    def write() -> str:
+        spec = build_scene_spec(layout)
+        spec.meshdir = str(assets / "assets")
+        return spec.to_xml()
+
+    recipe = f"{layout!r};{assets};{packaged.st_size};{packaged.st_mtime_ns}"
+    return cached_scene_xml(f"seed{layout.seed}", recipe, write)

@@ -254,10 +254,5 @@ def urdf_from_model(
 def robot_urdf() -> str:
     """humanoid_v1 (robot.model.humanoid_v1.build_robot_spec) as a URDF. The detailed meshes, which the URDF
     leaves out, are taken out of the spec before it compiles (4 s less; every OP3 body states its inertia)."""
-    spec = humanoid_v1.build_robot_spec()
-    for geom in [g for g in spec.geoms if g.group == humanoid_v1.DETAILED_MESH_GROUP]:
-        spec.delete(geom)
-    used = {g.meshname for g in spec.geoms}
-    for mesh in [m for m in spec.meshes if m.name not in used]:
-        spec.delete(mesh)
+    spec = humanoid_v1.remove_drawn_meshes(humanoid_v1.build_robot_spec())
     return urdf_from_model(spec.compile(), humanoid_v1.TRUNK_BODY, humanoid_v1.MODEL_NAME)

@@ -40,7 +40,8 @@ class MujocoSimBackend:
 
     def __init__(self, layout: WorldLayout, model: mujoco.MjModel | None = None) -> None:
         self.layout = layout
-        self.model = model if model is not None else build_scene(layout)
+        # physics only: the robot's detailed meshes are drawn by the cameras' and views' own models
+        self.model = model if model is not None else build_scene(layout, drawn=False)
         self.data = mujoco.MjData(self.model)
         self._joint_qpos = np.array([self.model.joint(n).qposadr[0] for n in humanoid_v1.JOINT_NAMES])
         self._joint_dof = np.array([self.model.joint(n).dofadr[0] for n in humanoid_v1.JOINT_NAMES])
