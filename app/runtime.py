@@ -102,6 +102,7 @@ class Runtime:
                     diagnostics=settings.diagnostics,
                     disk_path=settings.data_dir,
                     deadman_s=spec.deadman_s,
+                    walk=True,
                 )
         if worker is None:
             worker = (

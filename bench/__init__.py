@@ -17,6 +17,12 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
         from bench.load import run_load
 
         result = run_load(viewers=args.viewers or 20, presses=args.presses)
+    elif suite == "walk" and args.backend == "hil":
+        from bench.hil import run_hil_walk
+
+        result = run_hil_walk(
+            scripts=args.scripts, duration_s=args.script_duration, seed=args.seed or 0, lockstep=args.lockstep
+        )
     elif suite == "walk":
         from bench.walk import run_walk
 

@@ -486,6 +486,7 @@ def child_main(
                 diagnostics=diagnostics,
                 disk_path=disk_path,
                 deadman_s=hardware.deadman_s,
+                walk=True,  # when the config names an IMU and foot sensors
             )
         else:
             from robot.worker import RobotWorker

@@ -10,6 +10,7 @@ import sys
 
 from app.auth.cli import add_users_parser
 from app.cli.hardware import add_hardware_parser
+from app.cli.hil import add_hil_parser
 from app.deploy.db_cli import add_db_parser
 from app.deploy.doctor.cli import add_doctor_parser
 from app.deploy.service_cli import add_service_parser
@@ -440,6 +441,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_sessions_parser(sub)
     add_hardware_parser(sub)
+    add_hil_parser(sub)
     add_users_parser(sub)
 
     add_db_parser(sub)
@@ -501,6 +503,18 @@ def build_parser() -> argparse.ArgumentParser:
     )
     bench.add_argument("--session-minutes", type=float, default=10.0, help="sessions: length of the long session")
     bench.add_argument("--scripts", type=int, default=20, help="walk: random velocity scripts to run")
+    bench.add_argument(
+        "--backend",
+        choices=["sim", "hil"],
+        default="sim",
+        help="walk: sim (the simulation's own loop) or hil (the real-robot backend through the hardware-in-the-loop "
+        "rig, one script at a time)",
+    )
+    bench.add_argument(
+        "--lockstep",
+        action="store_true",
+        help="walk --backend hil: the rig's physics moves one control period per tick (not with the wall clock)",
+    )
     bench.add_argument("--script-duration", type=float, default=60.0, help="walk: seconds per script")
     bench.add_argument("--seed", type=int, default=0, help="walk, perception: first seed; network: the link's losses")
     bench.add_argument("--cuts", type=int, default=6, help="network: link cuts while driving")

@@ -14,6 +14,7 @@ by the controlled stop. What it lacks (no IMU, no foot sensors, no legs' control
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from collections.abc import Callable
@@ -22,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from robot.bodies.hardware_senses import HardwareSenses
-from robot.control.stats import LoopStats
+from robot.control.stats import BusTickStats, LoopStats
 from robot.core.body import BodyLinks, BodySnapshot, CommandHandler
 from robot.core.measurements import FALL_TILT_DEG, Measurements
 from robot.core.safety import LatchWords
@@ -115,6 +116,9 @@ class HardwareBody:
         self.senses = self.sensing.senses
         self.lacks = self.sensing.lacks(walking_enabled)
         self._walking_enabled = walking_enabled
+        self.tick_split = BusTickStats()  # each tick's time on the bus, and the rest
+        self._bus_s = 0.0
+        self._trunk_estimate: Callable[[], tuple[np.ndarray, np.ndarray]] | None = None
         self._zero_velocities = np.zeros(n)
 
     def bind(self, links: BodyLinks) -> None:
@@ -337,13 +341,16 @@ class HardwareBody:
             self.links.latch.latch(EStop(source="deadman", reason=reason))
 
     def sense(self) -> Measurements:
+        started = time.perf_counter()
         reading = self.bus.read()
         newly_lost = set(reading.lost) - set(self._reading.lost if self._reading is not None else ())
         self._reading = reading
         self._positions = np.where(np.isfinite(reading.positions), reading.positions, self._positions)
         for joint in sorted(newly_lost):
             self.links.publish("hardware/servo_lost", f"servo of {joint} stopped answering", Level.ERROR, joint=joint)
-        for sense in self.sensing.read():
+        lost = self.sensing.read()
+        self._bus_s = time.perf_counter() - started
+        for sense in lost:
             self._sense_lost(sense)
         return self.latest()
 
@@ -367,7 +374,9 @@ class HardwareBody:
                 self._estop_since = None
                 self.links.publish("hardware/torque", "torque off: the e-stop's controlled stop is done", Level.WARN)
             else:
+                started = time.perf_counter()
                 self.bus.write_goals(targets)
+                self._bus_s += time.perf_counter() - started
         else:
             self._targets = self._positions.copy()  # goal follows the limp robot: enabling torque holds it there
             self.links.hold(self._targets)
@@ -380,21 +389,37 @@ class HardwareBody:
         self._estop_since = time.monotonic()
 
     def after_tick(self, targets: np.ndarray, tick_s: float) -> None:
-        """No battery model or telemetry on the real robot yet."""
+        """The tick's bus time and compute (no battery model or telemetry on the real robot yet)."""
+        self.tick_split.record(self._bus_s, tick_s)
+        self._bus_s = 0.0
 
     def snapshot(self, measured: Measurements) -> BodySnapshot:
         sensed = bool(np.isfinite(measured.imu_quat).all())
         tilt = measured.tilt_deg if sensed else 0.0
         if sensed:
             self._watch_fall(tilt)
+        base, yaw = self._estimated_base()
         return BodySnapshot(
-            base_position=self._base,
-            base_yaw_rad=measured.yaw_rad if sensed else self._yaw,
+            base_position=base,
+            base_yaw_rad=yaw if yaw is not None else measured.yaw_rad if sensed else self._yaw,
             tilt_deg=tilt,
             fallen=tilt > FALL_TILT_DEG,
             qpos=tuple(self.scene.qpos_with_joints(self._positions).tolist()),
             torque_enabled=self._torque,
         )
+
+    def locate_by(self, trunk: Callable[[], tuple[np.ndarray, np.ndarray]]) -> None:
+        """Where the robot is, for its state and the mirror: the legs' estimate of its trunk (position, rotation)
+        in the map, once it walks (the real robot has no other)."""
+        self._trunk_estimate = trunk
+
+    def _estimated_base(self) -> tuple[tuple[float, float, float], float | None]:
+        if self._trunk_estimate is None:
+            return self._base, None
+        position, rotation = self._trunk_estimate()
+        if not (np.isfinite(position).all() and np.isfinite(rotation).all()):  # not placed yet
+            return self._base, None
+        return (float(position[0]), float(position[1]), float(position[2])), math.atan2(rotation[1, 0], rotation[0, 0])
 
     def _watch_fall(self, tilt_deg: float) -> None:
         """A fall with torque on: the controlled stop (the core holds the joints; the real robot then crouches and

@@ -56,3 +56,28 @@ class LoopStats:
 
     def snapshot(self) -> ControlStats:
         return self._snapshot
+
+
+class BusTickStats:
+    """A real robot's tick split in two: the time spent on the bus (the servos' read and goals, the sensor boards'
+    read) and the rest, the tick's compute. Percentiles over the last WINDOW_TICKS ticks."""
+
+    def __init__(self) -> None:
+        self._bus: deque[float] = deque(maxlen=WINDOW_TICKS)
+        self._compute: deque[float] = deque(maxlen=WINDOW_TICKS)
+
+    def record(self, bus_s: float, tick_s: float) -> None:
+        self._bus.append(bus_s)
+        self._compute.append(max(0.0, tick_s - bus_s))
+
+    def summary(self) -> dict[str, float]:
+        """p50, p99 and max of each, in ms (zeros before the first tick)."""
+        out: dict[str, float] = {}
+        for name, values in (("bus", self._bus), ("compute", self._compute)):
+            ms = np.fromiter(values, dtype=float) * 1e3 if values else np.zeros(1)
+            out |= {
+                f"{name}_p50_ms": float(np.percentile(ms, 50)),
+                f"{name}_p99_ms": float(np.percentile(ms, 99)),
+                f"{name}_max_ms": float(ms.max()),
+            }
+        return out

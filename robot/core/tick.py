@@ -11,6 +11,8 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+import numpy as np
+
 from robot.control.locomotion import LocomotionController
 from robot.control.stack import measured_pose, sensors
 from robot.control.stats import LoopStats
@@ -60,6 +62,9 @@ class ControlTick:
         self._on_reset_requested = on_reset_requested
         self._on_reset = on_reset
         self._reset_pending = False
+        # a robot that was not placed when built (the real one: its bus opens at start) starts the legs' estimate
+        # from its start pose at its first IMU reading
+        self._placed = locomotion is None or body.connected
         self._last_error: tuple[str, float] = ("", 0.0)  # what the last failing tick said, and when
 
     def tick(self) -> None:
@@ -70,6 +75,9 @@ class ControlTick:
             self._apply_reset()
         body.apply_requests()
         measured = body.sense()
+        if not self._placed and self._loco is not None and np.isfinite(measured.imu_quat).all():
+            self._loco.reset_odometry(measured_pose(measured), sensors(measured))
+            self._placed = True
         targets = self._arbiter.targets(measured)
         try:
             measured = body.actuate(targets)

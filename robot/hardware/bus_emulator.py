@@ -21,10 +21,10 @@ import select
 import threading
 import time
 import tty
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from multiprocessing.connection import Connection
-from typing import Any
+from typing import Any, Protocol
 
 from robot.hardware import control_table as ct
 from robot.hardware.emulated_faults import LATE_REPLY_S, ServoFaults
@@ -58,6 +58,7 @@ class EmulatedXM430:
         self.voltage_v = 12.0
         self._position = position_rad
         self._velocity = 0.0
+        self.driven = False  # the output moves as a physics engine says (`drive`), not by this servo's own model
         for field, value in (
             (ct.MODEL_NUMBER, ct.XM430_W350_MODEL),
             (ct.FIRMWARE_VERSION, 48),
@@ -107,6 +108,24 @@ class EmulatedXM430:
     def position_rad(self) -> float:
         return self._position
 
+    @property
+    def torque_enabled(self) -> bool:
+        return self.get(ct.TORQUE_ENABLE) == 1
+
+    @property
+    def goal_rad(self) -> float:
+        """The goal position (rad from the centre), what a plant driving the output steers it to."""
+        return (self.get(ct.GOAL_POSITION) - ct.POSITION_CENTRE) / ct.POSITION_PER_RAD
+
+    def drive(self, position_rad: float, velocity_rad_s: float, torque_nm: float) -> None:
+        """The output as the plant (the rig's physics) moved it, and the torque it took: from now on the servo
+        reports these instead of moving by its own model; its heat, current and protections follow the torque."""
+        self.driven = True
+        self._position = position_rad
+        self._velocity = velocity_rad_s
+        self.load_nm = torque_nm
+        self._refresh_present()
+
     # the motor -----------------------------------------------------------------------------------------------
 
     @property
@@ -123,7 +142,9 @@ class EmulatedXM430:
     def step(self, dt: float) -> None:
         self._check_watchdog()
         torque_on = self.get(ct.TORQUE_ENABLE) == 1
-        if torque_on:
+        if self.driven:  # the plant moves the output; the torque it measured is what the motor gives
+            torque = min(STALL_TORQUE_NM, abs(self.load_nm)) if torque_on else 0.0
+        elif torque_on:
             goal = (self.get(ct.GOAL_POSITION) - ct.POSITION_CENTRE) / ct.POSITION_PER_RAD
             error = goal - self._position
             speed = max(-NO_LOAD_SPEED_RAD_S, min(NO_LOAD_SPEED_RAD_S, error / max(dt, 0.02)))
@@ -134,7 +155,8 @@ class EmulatedXM430:
         else:
             self._velocity = 0.0
             torque = 0.0
-        self._position += self._velocity * dt
+        if not self.driven:
+            self._position += self._velocity * dt
         current = torque / STALL_TORQUE_NM * 2.3 + 0.04 * torque_on
         heat = current**2 * RESISTANCE_OHM
         self.temperature_c += dt / THERMAL_TAU_S * (heat * THERMAL_K_PER_W - (self.temperature_c - self.ambient_c))
@@ -213,6 +235,18 @@ class BusStats:
     busy_s: float = 0.0  # wire time of everything sent both ways, at the bus's baud rate
 
 
+class BusPlant(Protocol):
+    """What moves the servos' outputs when their own motor model does not (the rig's physics)."""
+
+    def between_packets(self) -> float:
+        """Run when due; the seconds until it is due again."""
+        ...
+
+    def before_sync_read(self, address: int, length: int) -> None:
+        """A sync read of the servos' control tables from `address` is about to be answered."""
+        ...
+
+
 class EmulatedBus:
     """Servos on a pseudo-terminal, served by a thread (in `BusEmulator`'s own process)."""
 
@@ -235,6 +269,13 @@ class EmulatedBus:
         self._parser = PacketParser()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
+        self._plant: BusPlant | None = None
+        self._line_at = 0.0  # when the wire is free (perf_counter)
+
+    def attach(self, plant: BusPlant) -> None:
+        """A plant run from the bus's thread under its lock (the rig's physics), between packets and before a sync
+        read is answered."""
+        self._plant = plant
 
     def start(self) -> None:
         self._thread = threading.Thread(target=self._run, name="dynamixel-emulator", daemon=True)
@@ -247,6 +288,11 @@ class EmulatedBus:
         for fd in (self._master, self._slave):
             with contextlib.suppress(OSError):
                 os.close(fd)
+
+    @property
+    def lock(self) -> threading.RLock:
+        """Held while a packet is answered: a plant that changes the servos' outputs takes it too."""
+        return self._lock
 
     def control(self, request: tuple) -> Any:
         """A test's request, answered under the bus's lock: ("fault", id, name, value), ("temperature", id, C),
@@ -277,8 +323,12 @@ class EmulatedBus:
     def _run(self) -> None:
         last = time.perf_counter()
         while not self._stop.is_set():
+            wait = self.motor_period
+            if self._plant is not None:
+                with self._lock:
+                    wait = min(wait, self._plant.between_packets())
             try:
-                ready, _, _ = select.select([self._master], [], [], self.motor_period)
+                ready, _, _ = select.select([self._master], [], [], wait)
             except (OSError, ValueError):
                 return
             now = time.perf_counter()
@@ -294,20 +344,27 @@ class EmulatedBus:
                 except OSError:
                     return
                 self.stats.bytes_in += len(data)
+                self._wire(len(data))  # the request's bytes, on the wire from when they were written
                 for packet in self._parser.feed(data):
                     self.stats.packets_in += 1
-                    self._wire(len(data))
                     for reply in self._answer(packet):
                         self._send(reply)
+
+    def _line(self, seconds: float) -> None:
+        """The wire is taken `seconds` more, from now or from when it is free (with `wire_time`, a reply goes out
+        when the line gets to it: the emulator's own work until then is hidden, as a servo replies while the
+        bytes before its reply are still on the wire)."""
+        self._line_at = max(self._line_at, time.perf_counter()) + seconds
 
     def _wire(self, nbytes: int) -> None:
         seconds = nbytes * 10 / self.baudrate  # 8 data bits, a start and a stop bit
         self.stats.busy_s += seconds
-        if self.wire_time:
-            time.sleep(seconds)
+        self._line(seconds)
 
     def _send(self, reply: bytes) -> None:
         self._wire(len(reply))
+        if self.wire_time:
+            time.sleep(max(0.0, self._line_at - time.perf_counter()))
         self.stats.bytes_out += len(reply)
         self.stats.replies += 1
         os.write(self._master, reply)
@@ -322,8 +379,7 @@ class EmulatedBus:
         if faults.drop_replies > 0:
             faults.drop_replies -= 1
             return []
-        if self.wire_time:
-            time.sleep(servo.return_delay_s)
+        self._line(servo.return_delay_s)
         if faults.late_replies > 0:
             faults.late_replies -= 1
             time.sleep(LATE_REPLY_S)
@@ -352,8 +408,7 @@ class EmulatedBus:
             parts.append((servo.error_byte(error), servo_id, data.ljust(length, b"\0")))
         if not parts:
             return []
-        if self.wire_time:
-            time.sleep(self.servos[parts[0][1]].return_delay_s)
+        self._line(self.servos[parts[0][1]].return_delay_s)
         packet = fast_sync_status(parts)
         if len(parts) < len(servo_ids):  # cut where the chain broke: no closing CRC
             packet = packet[:-2]
@@ -373,6 +428,9 @@ class EmulatedBus:
         for servo in heard:
             servo.last_heard_s = now
         instruction = packet.instruction
+        reads_all = instruction in (Instruction.FAST_SYNC_READ, Instruction.SYNC_READ)
+        if reads_all and packet.packet_id == BROADCAST_ID and len(p) >= 4 and self._plant is not None:
+            self._plant.before_sync_read(p[0] | p[1] << 8, p[2] | p[3] << 8)
         if instruction == Instruction.FAST_SYNC_READ and packet.packet_id == BROADCAST_ID and len(p) >= 4:
             return self._fast_sync_read(p[0] | p[1] << 8, p[2] | p[3] << 8, p[4:])
         if instruction == Instruction.PING:
@@ -457,11 +515,15 @@ class BusEmulator:
     def __exit__(self, *exc: object) -> None:
         self.stop()
 
+    def _child(self) -> tuple[Callable[..., None], tuple]:
+        """What the emulator's process runs, and its arguments after the pipe's end."""
+        return _serve, (self.servo_ids, self.baudrate, self.wire_time, self.positions, self.sensors)
+
     def start(self) -> None:
         context = mp.get_context("spawn")
         parent, child = context.Pipe()
-        args = (child, self.servo_ids, self.baudrate, self.wire_time, self.positions, self.sensors)
-        self._process = context.Process(target=_serve, args=args, name="dynamixel-emulator", daemon=True)
+        target, args = self._child()
+        self._process = context.Process(target=target, args=(child, *args), name="dynamixel-emulator", daemon=True)
         self._process.start()
         child.close()
         self._conn = parent
@@ -532,12 +594,18 @@ def _serve(
     positions: dict[int, float],
     sensors: bool,
 ) -> None:
-    # Real servos answer whatever the host is doing: where it may (root, or CAP_SYS_NICE), the emulator runs
-    # ahead of ordinary processes. It sleeps in select() between packets, so it takes nothing from them.
-    with contextlib.suppress(OSError, AttributeError):
-        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(EMULATOR_FIFO_PRIORITY))
     devices: list[EmulatedXM430 | EmulatedBoard] = [EmulatedXM430(i, positions.get(i, 0.0)) for i in servo_ids]
     bus = EmulatedBus(devices + (op3_sensor_boards() if sensors else []), baudrate, wire_time)
+    serve_bus(conn, bus, bus.control)
+
+
+def serve_bus(conn: Connection, bus: EmulatedBus, answer: Callable[[tuple], Any]) -> None:
+    """Start the bus at a real-time priority, say its port, then answer the parent's requests until "stop"."""
+    # Real servos answer whatever the host is doing: where it may (root, or CAP_SYS_NICE), the emulator runs
+    # ahead of ordinary processes. It sleeps in select() between packets, so it takes nothing from them. Threads
+    # started before this keep their own policy.
+    with contextlib.suppress(OSError, AttributeError):
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(EMULATOR_FIFO_PRIORITY))
     bus.start()
     conn.send(bus.port_name)
     try:
@@ -547,7 +615,7 @@ def _serve(
                 conn.send((True, None))
                 break
             try:
-                conn.send((True, bus.control(request)))
+                conn.send((True, answer(request)))
             except Exception as exc:  # a test's mistake: said, not a dead emulator
                 conn.send((False, repr(exc)))
     except EOFError:

@@ -11,6 +11,7 @@ from robot.bodies.hardware import DEADMAN_S, ESTOP_TORQUE_OFF_AFTER_S, NOT_ON_HA
 from robot.bodies.hardware_senses import HardwareSenses, ImuDriver
 from robot.config import RobotConfig
 from robot.control.locomotion import LocomotionController
+from robot.control.stack import build_locomotion
 from robot.diagnostics.thresholds import Thresholds
 from robot.hardware.bus import DynamixelBus
 from robot.hardware.bus_sensors import BusSensors
@@ -38,25 +39,31 @@ class HardwareWorker(Robot):
         deadman_s: float = DEADMAN_S,
         locomotion: LocomotionController | None = None,
         imu: ImuDriver | None = None,
+        walk: bool = False,
     ) -> None:
-        """`locomotion`: the legs' controller, for a robot with an IMU and foot sensors (None: postures only);
-        `imu`: an IMU driver to use instead of the one `config.imu` names (tests)."""
+        """`locomotion`: the legs' controller (None: postures only, unless `walk`); `walk`: build the legs'
+        controller when the config names an IMU and foot sensors, which it needs; `imu`: an IMU driver to use
+        instead of the one `config.imu` names (tests)."""
         bus = bus or DynamixelBus(config)
         started = time.monotonic()  # the body's clock, which its sensors stamp their readings with too
 
         def clock() -> float:
             return time.monotonic() - started
 
+        sensing = build_senses(config, bus, layout.robot_start, clock, imu)
+        walking = locomotion is not None or (walk and sensing.senses.can_walk)
         body = HardwareBody(
             config,
             layout,
             bus,
             estop_torque_off_s,
             deadman_s,
-            sensing=build_senses(config, bus, layout.robot_start, clock, imu),
-            walking_enabled=locomotion is not None,
+            sensing=sensing,
+            walking_enabled=walking,
             started_at=started,
         )
+        if walking and locomotion is None:  # the simulation's legs' controller; a late plan never stalls the loop
+            locomotion = build_locomotion(body.scene, planner_process=True, realtime=True)
         robot = RobotConfig(
             realtime=True,
             control_hz=config.control_hz,
@@ -65,6 +72,8 @@ class HardwareWorker(Robot):
             disk_path=disk_path,
         )
         super().__init__(body, layout, robot, locomotion=locomotion)
+        if locomotion is not None:
+            body.locate_by(self.localiser.map_trunk)
         self.hardware = config
         self.bus = body.bus
 

@@ -152,6 +152,15 @@ class MujocoSimBackend:
     def write(self, joint_targets: np.ndarray) -> None:
         self.data.ctrl[self._actuator] = joint_targets
 
+    def set_limp(self, limp: np.ndarray) -> None:
+        """Joints whose servo has torque off (a bool per joint): their actuators exert nothing until set back."""
+        if not hasattr(self, "_gains"):
+            self._gains = self.model.actuator_gainprm[self._actuator, 0].copy()
+            self._biases = self.model.actuator_biasprm[self._actuator, 1:3].copy()
+        limp = np.asarray(limp, dtype=bool)
+        self.model.actuator_gainprm[self._actuator, 0] = np.where(limp, 0.0, self._gains)
+        self.model.actuator_biasprm[self._actuator, 1:3] = np.where(limp[:, None], 0.0, self._biases)
+
     def step(self, duration_s: float) -> None:
         """Advance physics by `duration_s` (a whole number of physics steps). Raises `SimulationDiverged` when
         MuJoCo found a NaN, infinite or huge position, velocity or acceleration: it then resets the whole model to

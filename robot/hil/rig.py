@@ -1,0 +1,95 @@
+"""The hardware-in-the-loop rig: the simulated robot in its world (MuJoCo) behind the byte-level emulators of its
+devices, so the real-robot code (`serve --backend dynamixel`) runs unchanged against physics.
+
+On its servo bus (a pseudo-terminal the Dynamixel SDK opens as it would the U2D2): the 24 XM430s, whose goal
+positions drive the simulated joints and whose present position, velocity and current come from them, the OpenCR
+(ID 200) whose IMU registers hold the simulated trunk's, and the two FSR foot modules. The robot hangs on its stand,
+unmoving, until torque first comes on (as a real one is held while it is switched on).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import replace
+from multiprocessing.connection import Connection
+from typing import Any
+
+from robot.hardware import fsr
+from robot.hardware.bus_emulator import BusEmulator, EmulatedBus, EmulatedXM430, serve_bus
+from robot.hardware.config import HardwareConfig, default_config
+from robot.hardware.sensor_emulators import EmulatedFSR, EmulatedOpenCR
+from robot.hil.plant import LockstepPhysics, RealTimePhysics, RigPlant, RigTruth
+from robot.model.world import WorldLayout
+
+# The host waits this long past a reply's wire time: the rig's devices answer from a process that shares the
+# host's cores (and between physics blocks), not within the microseconds of real servos.
+RIG_REPLY_MARGIN_MS = 10.0
+
+
+def rig_config(base: HardwareConfig | None = None) -> HardwareConfig:
+    """The robot's configuration as the rig wires it: every servo of `base` (default: humanoid_v1's), the OpenCR's
+    IMU and the FSR feet on the bus, and replies waited for as long as the rig may take."""
+    config = base or default_config()
+    return replace(config, imu="opencr", feet="fsr", reply_margin_ms=max(config.reply_margin_ms, RIG_REPLY_MARGIN_MS))
+
+
+class HilRig(BusEmulator):
+    """The rig in its own process (the physics and the bus answer whatever the robot's process does). Use as a
+    context manager; `port_name` is the servo bus's device, for `HardwareConfig.port`."""
+
+    def __init__(
+        self,
+        layout: WorldLayout,
+        config: HardwareConfig | None = None,
+        baudrate: int | None = None,
+        wire_time: bool = True,
+        lockstep: bool = False,
+    ) -> None:
+        """`layout`: the world the robot is in (serve the robot with the same one, e.g. the same seed);
+        `config`: the robot's wiring (servo IDs, directions, offsets: the rig's servos are wired as it says);
+        `wire_time`: each packet takes its time on the wire at `baudrate` (default: the config's); `lockstep`: the
+        physics moves one control period per tick of the host (`LockstepPhysics`), not with the wall clock."""
+        self.config = config or default_config()
+        self.layout = layout
+        self.lockstep = lockstep
+        super().__init__(
+            [j.servo_id for j in self.config.joints], baudrate or self.config.baudrate, wire_time, sensors=True
+        )
+
+    def _child(self) -> tuple[Callable[..., None], tuple]:
+        return _serve_rig, (self.layout, self.config, self.baudrate, self.wire_time, self.lockstep)
+
+    def truth(self) -> RigTruth:
+        """Where the robot really is and whether it fell, where the objects are (for judging a run)."""
+        return self._call("truth")
+
+
+def _serve_rig(
+    conn: Connection, layout: WorldLayout, config: HardwareConfig, baudrate: int, wire_time: bool, lockstep: bool
+) -> None:
+    from robot.sim.backend import MujocoSimBackend  # the child's own: a spawned process starts bare
+
+    backend = MujocoSimBackend(layout)
+    standing = backend.read().joint_positions
+    names = list(backend.joint_names)
+    servos = {
+        j.servo_id: EmulatedXM430(j.servo_id, j.to_servo_rad(float(standing[names.index(j.joint)])))
+        for j in config.joints
+    }
+    imu = EmulatedOpenCR()
+    feet = {"left": EmulatedFSR(fsr.LEFT_FSR_ID), "right": EmulatedFSR(fsr.RIGHT_FSR_ID)}
+    bus = EmulatedBus([*servos.values(), imu, *feet.values()], baudrate, wire_time)
+    plant = RigPlant(backend, config, servos, imu, feet)
+    with bus.lock:
+        plant.report()
+    physics = (
+        LockstepPhysics(plant, 1.0 / config.control_hz) if lockstep else RealTimePhysics(plant, backend.physics_dt)
+    )
+    bus.attach(physics)
+
+    def answer(request: tuple) -> Any:
+        if request[0] == "truth":
+            return plant.truth(physics.late_blocks)
+        return bus.control(request)
+
+    serve_bus(conn, bus, answer)

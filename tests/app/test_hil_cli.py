@@ -1,0 +1,65 @@
+"""`humanoid hil`: the rig from the command line, found by the real robot's own tools through the configuration it
+writes, and stopped cleanly."""
+
+from __future__ import annotations
+
+import json
+import signal
+import subprocess
+import sys
+import time
+
+from robot.hardware.config import load_config
+
+
+def test_the_rig_writes_its_configuration_and_hardware_check_finds_the_robot_on_it(tmp_path) -> None:
+    config = tmp_path / "hil.toml"
+    rig = subprocess.Popen(
+        [sys.executable, "-m", "app.cli", "hil", "--seed", "2", "--write-config", str(config)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        deadline = time.monotonic() + 120
+        while not config.exists():
+            assert rig.poll() is None, rig.communicate()
+            assert time.monotonic() < deadline, "the rig did not write its configuration"
+            time.sleep(0.1)
+        wired = load_config(config)
+        assert wired.imu == "opencr" and wired.feet == "fsr" and wired.port.startswith("/dev/")
+
+        check = subprocess.run(
+            [sys.executable, "-m", "app.cli", "hardware", "check", "--config", str(config), "--json"],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+        assert check.returncode == 0, check.stderr
+        report = json.loads(check.stdout)
+        assert report["answered"] == report["expected"] == 24
+        assert all(board["found"] for board in report["sensor_boards"])
+        assert report["imu_tilt_deg"] < 1.0  # upright on its stand
+    finally:
+        rig.send_signal(signal.SIGTERM)
+        out, err = rig.communicate(timeout=60)
+    assert rig.returncode == 0, err
+    assert f"--robot-config {config} --seed 2" in out and "rig stopped" in out and "upright" in out
+
+
+def test_bench_walk_through_the_rig_writes_falls_tracking_and_the_ticks_bus_and_compute(tmp_path) -> None:
+    out = tmp_path / "hil.json"
+    command = ["bench", "walk", "--backend", "hil", "--lockstep", "--scripts", "1", "--script-duration", "4"]
+    bench = subprocess.run(
+        [sys.executable, "-m", "app.cli", *command, "--output", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert bench.returncode == 0, bench.stderr
+    result = json.loads(out.read_text())
+    assert result["backend"] == "hil" and result["falls"] == 0 and len(result["trials"]) == 1
+    trial = result["trials"][0]
+    assert trial["physics_s"] >= 4.0 and trial["ticks"] > 0
+    # the tick's two parts, each measured: the bus's round trip (servos, boards, goals) and the compute
+    assert 0 < trial["bus_p50_ms"] <= trial["bus_p99_ms"] and 0 < trial["compute_p50_ms"] <= trial["compute_p99_ms"]
