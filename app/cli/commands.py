@@ -191,7 +191,9 @@ def _run(args: argparse.Namespace, settings: Settings) -> int:
         from robot.speech.audio import read_audio
 
         recording = (heard, read_audio(args.audio).wav_bytes())
-    result = run_command(args.text, seed=args.seed, settings=settings, timeout_s=args.timeout, heard=recording)
+    result = run_command(
+        args.text, seed=args.seed, settings=settings, timeout_s=args.timeout, heard=recording, backend=args.backend
+    )
     if heard is not None:
         result["speech"] = {**heard, "file": args.audio}
     if args.json:
@@ -396,6 +398,13 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--seed", type=int, default=0)
     run.add_argument("--json", action="store_true", help="print the result as JSON")
     run.add_argument("--timeout", type=float, default=300.0, help="wall-clock limit in seconds")
+    run.add_argument(
+        "--backend",
+        choices=["sim", "hil"],
+        default="sim",
+        help="sim (the simulation, as fast as it goes) or hil (the real-robot backend driving the simulated robot "
+        "through the hardware-in-the-loop rig, in lockstep; sim_time_s is the rig's physics time)",
+    )
     run.set_defaults(func=_run)
 
     transcribe = sub.add_parser("transcribe", help="speech to text, with the world's names as hints")

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import time
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from sqlalchemy import Engine
 
@@ -12,14 +12,17 @@ from app.sessions.db import make_engine, make_session_factory, upgrade_to_head
 from app.sessions.maintenance import close_interrupted_sessions
 from app.sessions.recorder import SessionRecorder
 from app.settings import Settings
-from robot.interface import PlanState, RunCommand
+from robot.interface import PlanState, RobotPort, RunCommand, SetTorque
 from robot.model.world import generate_world
 from robot.worker import RobotWorker
+
+if TYPE_CHECKING:
+    from robot.hil.rig import HilRig
 
 SETTLE_SIM_S = 0.5  # let the robot settle on its feet before the command, as an operator would
 
 
-def open_run_session(settings: Settings, worker: RobotWorker, seed: int) -> tuple[SessionRecorder, Engine]:
+def open_run_session(settings: Settings, worker: RobotPort, seed: int) -> tuple[SessionRecorder, Engine]:
     """A headless run's session: the database brought to its newest schema, sessions a crash left open closed, and
     a new session recording `worker`. The caller closes the recorder, then disposes of the engine."""
     upgrade_to_head(settings.database_url)
@@ -44,9 +47,19 @@ def run_command(
     settings: Settings,
     timeout_s: float = 300.0,
     heard: tuple[dict[str, Any], bytes] | None = None,
+    backend: str = "sim",
 ) -> dict[str, Any]:
     """Plan and execute `text` in a fresh simulation; returns the result the CLI prints. `heard`: the transcript
-    `text` came from and its recording (WAV), kept with the session."""
+    `text` came from and its recording (WAV), kept with the session. `backend` "hil": the real-robot backend
+    drives the simulated robot through the hardware-in-the-loop rig (in lockstep), judged by the rig's physics."""
+    if backend == "hil":
+        from robot.hardware.worker import HardwareWorker
+        from robot.hil.rig import HilRig, rig_config
+
+        layout = generate_world(seed)
+        with HilRig(layout, rig_config(), lockstep=True) as rig:
+            robot = HardwareWorker(rig.robot_config(), layout, disk_path=settings.data_dir, deadman_s=0.0, walk=True)
+            return _run_on(robot, text, seed, settings, timeout_s, heard, rig)
     worker = RobotWorker(
         generate_world(seed),
         realtime=False,
@@ -54,11 +67,31 @@ def run_command(
         planning=settings.planner_config(),
         max_auto_replans=settings.max_auto_replans,
     )
+    return _run_on(worker, text, seed, settings, timeout_s, heard)
+
+
+def _run_on(
+    worker: RobotPort,
+    text: str,
+    seed: int,
+    settings: Settings,
+    timeout_s: float,
+    heard: tuple[dict[str, Any], bytes] | None,
+    rig: HilRig | None = None,
+) -> dict[str, Any]:
+    """`rig`: the robot is on the rig: torque on first, and the rig's physics says how long it took and whether it
+    fell."""
     recorder, engine = open_run_session(settings, worker, seed)
     started = time.perf_counter()
     worker.start()
     try:
-        worker.wait_for(lambda s: s.sim_time_s >= SETTLE_SIM_S, timeout_s)
+        if rig is not None:
+            worker.submit(SetTorque(True))
+            deadline = time.monotonic() + timeout_s
+            while rig.truth().sim_time_s < SETTLE_SIM_S and time.monotonic() < deadline:
+                time.sleep(0.05)
+        else:
+            worker.wait_for(lambda s: s.sim_time_s >= SETTLE_SIM_S, timeout_s)
         if heard is not None:
             transcript, wav = heard
             recorder.record_transcript(transcript, "cli", save_recording(settings.audio_dir, recorder.session_id, wav))
@@ -75,11 +108,13 @@ def run_command(
             timeout_s,
         )
         state = worker.state()
+        truth = rig.truth() if rig is not None else None
     finally:
         worker.stop()
     wall = time.perf_counter() - started
     plan_status = state.plan if reply.accepted else None
-    success = bool(finished and plan_status and plan_status.state == PlanState.SUCCEEDED and not state.fallen)
+    fell = state.fallen or (truth is not None and truth.fallen)
+    success = bool(finished and plan_status and plan_status.state == PlanState.SUCCEEDED and not fell)
     result: dict[str, Any] = {
         "success": success,
         "transcript": text,
@@ -88,12 +123,18 @@ def run_command(
             {"action": s.action, "args": s.args, "status": s.state.value, "detail": s.detail}
             for s in (plan_status.steps if plan_status else ())
         ],
-        "sim_time_s": round(state.sim_time_s, 3),
+        "sim_time_s": round(truth.sim_time_s if truth is not None else state.sim_time_s, 3),
         "wall_time_s": round(wall, 3),
-        "fell": state.fallen,
+        "fell": fell,
         "held_object": state.held_object,
         "session_id": recorder.session_id,
     }
+    if truth is not None:  # what the robot cannot know: where it really ended, and the objects
+        result["rig"] = {
+            "base_position": [round(v, 3) for v in truth.base_position],
+            "base_yaw_rad": round(truth.base_yaw_rad, 3),
+            "objects": {name: [round(v, 3) for v in xyz] for name, xyz in truth.objects.items()},
+        }
     if not reply.accepted:
         result["error"] = reply.message
         result["errors"] = list(reply.errors)

@@ -8,7 +8,6 @@ import argparse
 import signal
 import sys
 import threading
-from dataclasses import replace
 from pathlib import Path
 
 from app.settings import Settings
@@ -31,10 +30,11 @@ def _hil(args: argparse.Namespace, settings: Settings) -> int:
         signal.signal(sig, lambda *_: stop.set())
     with HilRig(generate_world(args.seed), config, lockstep=args.lockstep) as rig:
         out.parent.mkdir(parents=True, exist_ok=True)
-        save_config(replace(config, port=rig.port_name), out)
+        save_config(rig.robot_config(), out)
         pace = "one control period per tick of the robot" if args.lockstep else "real time"
         print(
-            f"rig up (seed {args.seed}, physics in {pace}): servo bus {rig.port_name}, OpenCR IMU and FSR feet on it",
+            f"rig up (seed {args.seed}, physics in {pace}): servo bus {rig.port_name} with the OpenCR IMU and FSR "
+            f"feet, lidar {rig.devices['lidar']}",
             flush=True,
         )
         print(f"its robot configuration: {out}", flush=True)

@@ -21,6 +21,9 @@ from robot.hardware.bus_emulator import EmulatedXM430
 from robot.hardware.config import HardwareConfig
 from robot.hardware.sensor_emulators import EmulatedFSR, EmulatedOpenCR
 from robot.model import humanoid_v1
+from robot.perception.lidar import LaserScan, SimLidar
+from robot.sensors.ld06_emulator import TURN_S as LIDAR_TURN_S
+from robot.sensors.ld06_emulator import Ld06Emulator
 from robot.sim.backend import MujocoSimBackend
 
 MAX_STEPS_PER_BLOCK = 3  # physics steps taken at once when behind (a packet waits for them); further behind, the
@@ -110,6 +113,11 @@ class RigPlant:
             if side in self._feet:
                 self._feet[side].sense(m.foot_forces[row])
 
+    def scan(self, lidar: SimLidar) -> LaserScan:
+        """A lidar turn from where the robot is now."""
+        with self._lock:
+            return lidar.scan(self.backend.data)
+
     def truth(self, late_blocks: int = 0) -> RigTruth:
         with self._lock:
             m = self.backend.read()
@@ -177,3 +185,29 @@ class LockstepPhysics:
     def before_sync_read(self, address: int, length: int) -> None:
         if address <= ct.PRESENT_POSITION.address < address + length:
             self.plant.advance(self.period_s)
+
+
+class RigLidar:
+    """The lidar on the rig: an LD06 on its own pseudo-terminal (`port_name`), sending a turn every 0.1 s, each
+    cast from where the simulated robot is then."""
+
+    def __init__(self, plant: RigPlant, layout_seed: int = 0) -> None:
+        self.plant = plant
+        self._lidar = SimLidar(plant.backend.model, seed=layout_seed)
+        self._device = Ld06Emulator(plant.scan(self._lidar))
+        self.port_name = self._device.port_name
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="rig-lidar", daemon=True)
+
+    def start(self) -> None:
+        self._device.__enter__()
+        self._thread.start()
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=5)
+        self._device.__exit__(None, None, None)
+
+    def _run(self) -> None:
+        while not self._stop.wait(LIDAR_TURN_S):
+            self._device.set_scan(self.plant.scan(self._lidar))

@@ -3,8 +3,9 @@ devices, so the real-robot code (`serve --backend dynamixel`) runs unchanged aga
 
 On its servo bus (a pseudo-terminal the Dynamixel SDK opens as it would the U2D2): the 24 XM430s, whose goal
 positions drive the simulated joints and whose present position, velocity and current come from them, the OpenCR
-(ID 200) whose IMU registers hold the simulated trunk's, and the two FSR foot modules. The robot hangs on its stand,
-unmoving, until torque first comes on (as a real one is held while it is switched on).
+(ID 200) whose IMU registers hold the simulated trunk's, and the two FSR foot modules. On its own pseudo-terminal,
+an LD06 lidar whose turns are cast in the simulated world. The robot hangs on its stand, unmoving, until torque
+first comes on (as a real one is held while it is switched on).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from robot.hardware import fsr
 from robot.hardware.bus_emulator import BusEmulator, EmulatedBus, EmulatedXM430, serve_bus
 from robot.hardware.config import HardwareConfig, default_config
 from robot.hardware.sensor_emulators import EmulatedFSR, EmulatedOpenCR
-from robot.hil.plant import LockstepPhysics, RealTimePhysics, RigPlant, RigTruth
+from robot.hil.plant import LockstepPhysics, RealTimePhysics, RigLidar, RigPlant, RigTruth
 from robot.model.world import WorldLayout
 
 # The host waits this long past a reply's wire time: the rig's devices answer from a process that shares the
@@ -52,12 +53,21 @@ class HilRig(BusEmulator):
         self.config = config or default_config()
         self.layout = layout
         self.lockstep = lockstep
+        self.devices: dict[str, str] = {}  # the other devices' ports, once started
         super().__init__(
             [j.servo_id for j in self.config.joints], baudrate or self.config.baudrate, wire_time, sensors=True
         )
 
     def _child(self) -> tuple[Callable[..., None], tuple]:
         return _serve_rig, (self.layout, self.config, self.baudrate, self.wire_time, self.lockstep)
+
+    def start(self) -> None:
+        super().start()
+        self.devices = self._call("devices")
+
+    def robot_config(self) -> HardwareConfig:
+        """The robot's configuration pointed at the rig: its servo bus, and the lidar's port."""
+        return replace(self.config, port=self.port_name, lidar=f"ld06:{self.devices['lidar']}")
 
     def truth(self) -> RigTruth:
         """Where the robot really is and whether it fell, where the objects are (for judging a run)."""
@@ -87,9 +97,17 @@ def _serve_rig(
     )
     bus.attach(physics)
 
+    lidar = RigLidar(plant, layout.seed)
+    lidar.start()
+
     def answer(request: tuple) -> Any:
         if request[0] == "truth":
             return plant.truth(physics.late_blocks)
+        if request[0] == "devices":
+            return {"lidar": lidar.port_name}
         return bus.control(request)
 
-    serve_bus(conn, bus, answer)
+    try:
+        serve_bus(conn, bus, answer)
+    finally:
+        lidar.stop()

@@ -4,12 +4,15 @@ writes, and stopped cleanly."""
 from __future__ import annotations
 
 import json
+import math
+import os
 import signal
 import subprocess
 import sys
 import time
 
 from robot.hardware.config import load_config
+from robot.model.world import generate_world
 
 
 def test_the_rig_writes_its_configuration_and_hardware_check_finds_the_robot_on_it(tmp_path) -> None:
@@ -63,3 +66,35 @@ def test_bench_walk_through_the_rig_writes_falls_tracking_and_the_ticks_bus_and_
     assert trial["physics_s"] >= 4.0 and trial["ticks"] > 0
     # the tick's two parts, each measured: the bus's round trip (servos, boards, goals) and the compute
     assert 0 < trial["bus_p50_ms"] <= trial["bus_p99_ms"] and 0 < trial["compute_p50_ms"] <= trial["compute_p99_ms"]
+
+
+def test_run_through_the_rig_maps_with_the_lidar_and_walks_to_a_place(tmp_path) -> None:
+    run = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "app.cli",
+            "run",
+            "go to the charging dock",
+            "--backend",
+            "hil",
+            "--seed",
+            "3",
+            "--json",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=900,
+        env={
+            **os.environ,
+            "DATABASE_URL": f"sqlite:///{tmp_path / 'hil.db'}",
+            "HUMANOID_AUDIO_DIR": str(tmp_path / "audio"),
+        },
+    )
+    assert run.returncode == 0, run.stdout + run.stderr
+    result = json.loads(run.stdout)
+    assert result["success"] and not result["fell"]
+    assert [s["status"] for s in result["steps"]] == ["succeeded", "succeeded"]
+    assert result["sim_time_s"] > 5.0  # the rig's physics time: the walk took its time there
+    dock = next(p for p in generate_world(3).places if p.name == "charging dock").approach
+    assert math.dist(result["rig"]["base_position"][:2], dock[:2]) < 0.15  # where it really is, not where it thinks
