@@ -91,7 +91,12 @@ def build_senses(
         imu = Bno055Imu(config.imu.split(":", 1)[1], clock)
     boards = BusSensors(bus.port, bus.packets, imu=config.imu == "opencr", feet=config.feet == "fsr", clock=clock)
     camera = lidar = None
-    if config.camera == "realsense":
+    if config.camera.startswith("rig:"):  # the hardware-in-the-loop rig's head camera, as a RealSense
+        from robot.sensors.realsense import RealSenseCamera
+        from robot.sensors.realsense_rig import RigFrameSource
+
+        camera = RealSenseCamera(RigFrameSource(config.camera.split(":", 1)[1]), clock=clock)
+    elif config.camera == "realsense":
         from robot.sensors.realsense import RealSenseCamera  # the optional extra: imported only when asked for
 
         camera = RealSenseCamera(clock=clock)

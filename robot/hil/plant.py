@@ -14,6 +14,7 @@ import time
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+import mujoco
 import numpy as np
 
 from robot.hardware import control_table as ct
@@ -112,6 +113,17 @@ class RigPlant:
         for row, side in enumerate(("left", "right")):
             if side in self._feet:
                 self._feet[side].sense(m.foot_forces[row])
+
+    def pose_into(self, data: mujoco.MjData) -> float:
+        """The scene's pose now (the robot, the objects, the boxes) into another `MjData` of the same model, for
+        a sensor to draw from outside the lock; returns the physics time."""
+        with self._lock:
+            d = self.backend.data
+            data.qpos[:] = d.qpos
+            data.mocap_pos[:] = d.mocap_pos
+            data.mocap_quat[:] = d.mocap_quat
+            data.time = d.time
+            return float(d.time)
 
     def scan(self, lidar: SimLidar) -> LaserScan:
         """A lidar turn from where the robot is now."""

@@ -4,12 +4,16 @@ devices, so the real-robot code (`serve --backend dynamixel`) runs unchanged aga
 On its servo bus (a pseudo-terminal the Dynamixel SDK opens as it would the U2D2): the 24 XM430s, whose goal
 positions drive the simulated joints and whose present position, velocity and current come from them, the OpenCR
 (ID 200) whose IMU registers hold the simulated trunk's, and the two FSR foot modules. On its own pseudo-terminal,
-an LD06 lidar whose turns are cast in the simulated world. The robot hangs on its stand, unmoving, until torque
-first comes on (as a real one is held while it is switched on).
+an LD06 lidar whose turns are cast in the simulated world; on a Unix socket, the head camera's RGB-D frames (the
+robot's RealSense driver reads them through librealsense's software device). The robot hangs on its stand,
+unmoving, until torque first comes on (as a real one is held while it is switched on).
 """
 
 from __future__ import annotations
 
+import os
+import shutil
+import tempfile
 from collections.abc import Callable
 from dataclasses import replace
 from multiprocessing.connection import Connection
@@ -19,6 +23,7 @@ from robot.hardware import fsr
 from robot.hardware.bus_emulator import BusEmulator, EmulatedBus, EmulatedXM430, serve_bus
 from robot.hardware.config import HardwareConfig, default_config
 from robot.hardware.sensor_emulators import EmulatedFSR, EmulatedOpenCR
+from robot.hil.camera import RigCamera
 from robot.hil.plant import LockstepPhysics, RealTimePhysics, RigLidar, RigPlant, RigTruth
 from robot.model.world import WorldLayout
 
@@ -66,8 +71,11 @@ class HilRig(BusEmulator):
         self.devices = self._call("devices")
 
     def robot_config(self) -> HardwareConfig:
-        """The robot's configuration pointed at the rig: its servo bus, and the lidar's port."""
-        return replace(self.config, port=self.port_name, lidar=f"ld06:{self.devices['lidar']}")
+        """The robot's configuration pointed at the rig: its servo bus, the lidar's port and the camera's stream."""
+        devices = self.devices
+        return replace(
+            self.config, port=self.port_name, lidar=f"ld06:{devices['lidar']}", camera=f"rig:{devices['camera']}"
+        )
 
     def truth(self) -> RigTruth:
         """Where the robot really is and whether it fell, where the objects are (for judging a run)."""
@@ -99,15 +107,20 @@ def _serve_rig(
 
     lidar = RigLidar(plant, layout.seed)
     lidar.start()
+    folder = tempfile.mkdtemp(prefix="humanoid-rig-")
+    camera = RigCamera(plant, os.path.join(folder, "camera.sock"), layout.seed)
+    camera.start()
 
     def answer(request: tuple) -> Any:
         if request[0] == "truth":
             return plant.truth(physics.late_blocks)
         if request[0] == "devices":
-            return {"lidar": lidar.port_name}
+            return {"lidar": lidar.port_name, "camera": camera.path}
         return bus.control(request)
 
     try:
         serve_bus(conn, bus, answer)
     finally:
         lidar.stop()
+        camera.stop()
+        shutil.rmtree(folder, ignore_errors=True)

@@ -120,3 +120,49 @@ def test_realsense_frames_detect_and_localise_as_the_simulated_ones(suite, count
         assert wait(lambda: (p := camera.problem()) and "stalled" not in p and p)
     finally:
         camera.stop()
+
+
+def test_the_rigs_camera_stream_reaches_the_realsense_driver_and_its_end_is_said(counter_view, tmp_path) -> None:
+    """The hardware-in-the-loop rig's frames, over its socket, into librealsense's software device and out of the
+    RealSense driver as they went in; the rig going away is the camera unplugged."""
+    pytest.importorskip("pyrealsense2", reason="the realsense extra is not installed (or libusb-1.0-0 is missing)")
+    import socket
+    import threading
+
+    from robot.sensors.realsense import RealSenseCamera
+    from robot.sensors.realsense_rig import RigFrameSource
+    from robot.sensors.rgbd_stream import RgbdFrame, encode_frame
+
+    path = str(tmp_path / "camera.sock")
+    server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    server.bind(path)
+    server.listen(1)
+    done = threading.Event()
+
+    def rig() -> None:
+        client, _ = server.accept()
+        with client:
+            frame = RgbdFrame(0, 1.0, counter_view.rgb, counter_view.depth, counter_view.intrinsics)
+            while not done.wait(0.05):
+                client.sendall(encode_frame(frame))
+        server.close()  # the rig's process is gone
+
+    thread = threading.Thread(target=rig, daemon=True)
+    thread.start()
+    camera = RealSenseCamera(RigFrameSource(path), stall_after_s=0.5)
+    camera.start()
+    try:
+        image = wait(camera.latest)
+        assert np.array_equal(image.rgb, counter_view.rgb) and image.intrinsics.fx == pytest.approx(
+            counter_view.intrinsics.fx
+        )
+        valid = (image.depth > 0) & (counter_view.depth > 0)
+        assert np.mean(np.abs(image.depth[valid] - counter_view.depth[valid]) < 0.002) > 0.95
+        done.set()  # the rig stops
+        thread.join(timeout=5)
+        said = wait(lambda: (p := camera.problem()) and ("ended" in p or "no camera stream" in p) and p)
+        assert str(tmp_path) in said  # it names where the stream was
+    finally:
+        done.set()
+        camera.stop()
+        server.close()
