@@ -34,10 +34,12 @@ def _hil(args: argparse.Namespace, settings: Settings) -> int:
         pace = "one control period per tick of the robot" if args.lockstep else "real time"
         print(
             f"rig up (seed {args.seed}, physics in {pace}): servo bus {rig.port_name} with the OpenCR IMU and FSR "
-            f"feet, lidar {rig.devices['lidar']}",
+            f"feet, lidar {rig.devices['lidar']}, camera stream {rig.devices['camera']}",
             flush=True,
         )
         print(f"its robot configuration: {out}", flush=True)
+        if rig.robot_config().camera == "none":
+            print("no camera: the robot's RealSense driver needs the realsense extra (pip install '.[realsense]')")
         print(f"drive it: humanoid serve --backend dynamixel --robot-config {out} --seed {args.seed}", flush=True)
         stop.wait(args.duration if args.duration > 0 else None)
         truth = rig.truth()

@@ -13,7 +13,7 @@ grippers 21-24); `humanoid hardware calibrate` records the zero offsets into the
     [sensors]                 # each may be "none" (see docs/real-robot-sensors.md)
     imu = "opencr"            # the OpenCR at ID 200 on the servo bus, or "bno055:/dev/ttyUSB1" (its UART)
     feet = "fsr"              # the FSR foot modules at IDs 111 (right) and 112 (left) on the servo bus
-    camera = "0"              # an OpenCV device index, a path or stream URL, or "realsense"
+    camera = "0"              # an OpenCV device index, a path or stream URL, "realsense", or "rig:PATH" (the HIL rig)
     lidar = "ld06:/dev/ttyUSB2"   # an LDRobot LD06 or LD19 on its serial port
 
     [joints.r_knee]
@@ -92,7 +92,7 @@ class HardwareConfig:
     joints: tuple[JointServo, ...] = field(default_factory=tuple)
     imu: str = "none"  # "opencr", "bno055:<serial port>" or "none"
     feet: str = "none"  # "fsr" or "none"
-    camera: str = "none"  # a device index, path or URL for OpenCV, "realsense", or "none"
+    camera: str = "none"  # an OpenCV index, path or URL, "realsense", "rig:PATH", or "none"
     lidar: str = "none"  # "ld06:<serial port>", "ld19:<serial port>" or "none"
 
     def __post_init__(self) -> None:

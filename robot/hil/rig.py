@@ -11,6 +11,7 @@ unmoving, until torque first comes on (as a real one is held while it is switche
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import shutil
 import tempfile
@@ -71,11 +72,12 @@ class HilRig(BusEmulator):
         self.devices = self._call("devices")
 
     def robot_config(self) -> HardwareConfig:
-        """The robot's configuration pointed at the rig: its servo bus, the lidar's port and the camera's stream."""
+        """The robot's configuration pointed at the rig: its servo bus, the lidar's port and the camera's stream
+        (no camera without the `realsense` extra, whose driver reads it)."""
         devices = self.devices
-        return replace(
-            self.config, port=self.port_name, lidar=f"ld06:{devices['lidar']}", camera=f"rig:{devices['camera']}"
-        )
+        lidar = f"ld06:{devices['lidar']}"
+        camera = f"rig:{devices['camera']}" if importlib.util.find_spec("pyrealsense2") is not None else "none"
+        return replace(self.config, port=self.port_name, lidar=lidar, camera=camera)
 
     def truth(self) -> RigTruth:
         """Where the robot really is and whether it fell, where the objects are (for judging a run)."""

@@ -166,3 +166,18 @@ def test_the_rigs_camera_stream_reaches_the_realsense_driver_and_its_end_is_said
         done.set()
         camera.stop()
         server.close()
+
+
+def test_a_camera_stream_that_is_not_frames_is_refused_and_a_cut_one_ends(counter_view) -> None:
+    import io
+
+    from robot.sensors.rgbd_stream import RgbdFrame, encode_frame, read_frame
+
+    with pytest.raises(ValueError, match="not an RGB-D frame stream"):
+        read_frame(io.BytesIO(b"HTTP/1.1 200 OK\r\n" * 4))
+    whole = encode_frame(RgbdFrame(7, 2.5, counter_view.rgb, counter_view.depth, counter_view.intrinsics))
+    frame = read_frame(io.BytesIO(whole))
+    assert frame is not None and frame.seq == 7 and frame.stamp_s == 2.5
+    assert np.array_equal(frame.rgb, counter_view.rgb)
+    assert np.abs(frame.depth_m - counter_view.depth).max() <= 0.0005 + 1e-6  # 1 mm counts
+    assert read_frame(io.BytesIO(whole[: len(whole) // 2])) is None  # the stream cut mid-frame: its end
