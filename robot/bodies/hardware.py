@@ -30,7 +30,7 @@ from robot.core.safety import LatchWords
 from robot.diagnostics.robot_sources import RobotReadings
 from robot.hardware.bus import BusError, BusReading, DynamixelBus
 from robot.hardware.config import HardwareConfig
-from robot.hardware.xm430 import STALL_CURRENT_A, ServoReadings
+from robot.hardware.xm430 import LOAD_AVERAGE_S, STALL_CURRENT_A, ServoReadings
 from robot.interface import (
     CommandReply,
     EStop,
@@ -120,6 +120,7 @@ class HardwareBody:
         self._bus_s = 0.0
         self._trunk_estimate: Callable[[], tuple[np.ndarray, np.ndarray]] | None = None
         self._zero_velocities = np.zeros(n)
+        self._load_pct = np.zeros(n)
 
     def bind(self, links: BodyLinks) -> None:
         self._links = links
@@ -346,6 +347,9 @@ class HardwareBody:
         newly_lost = set(reading.lost) - set(self._reading.lost if self._reading is not None else ())
         self._reading = reading
         self._positions = np.where(np.isfinite(reading.positions), reading.positions, self._positions)
+        # the load said in diagnostics is sustained load, as the simulation's: a step's spike is not an alarm
+        load = np.nan_to_num(reading.currents_a) / STALL_CURRENT_A * 100.0
+        self._load_pct += (load - self._load_pct) * min(1.0, self.dt / LOAD_AVERAGE_S)
         for joint in sorted(newly_lost):
             self.links.publish("hardware/servo_lost", f"servo of {joint} stopped answering", Level.ERROR, joint=joint)
         lost = self.sensing.read()
@@ -487,7 +491,7 @@ class HardwareBody:
             temperature_c=r.temperatures_c,
             current_a=r.currents_a,
             voltage_v=r.voltages_v,
-            load_pct=r.currents_a / STALL_CURRENT_A * 100.0,
+            load_pct=self._load_pct.copy(),
             position_error_rad=(self._targets - self._positions) if self._torque else np.zeros(n),
             error_bits=r.hardware_errors,
         )

@@ -27,6 +27,7 @@ MIN_VOLTAGE_V = 9.5  # Min Voltage Limit default (address 34), 95 x 0.1 V
 MAX_VOLTAGE_V = 16.0  # Max Voltage Limit default (address 32)
 STALL_TORQUE_NM = 4.1  # at 12 V
 STALL_CURRENT_A = 2.3
+LOAD_AVERAGE_S = 1.0  # the load reported is averaged this long, as the servo's Present Load is smoothed
 OVERLOAD_LOAD_PCT = 95.0  # a load this high ...
 OVERLOAD_AFTER_S = 3.0  # ... held this long trips the overload bit (a grasp pushes at stall for ~0.5 s)
 

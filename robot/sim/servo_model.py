@@ -15,10 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from robot.hardware import xm430
-from robot.hardware.xm430 import HardwareError, ServoReadings
+from robot.hardware.xm430 import LOAD_AVERAGE_S, HardwareError, ServoReadings
 from robot.power.battery import ServoElectrical
-
-LOAD_AVERAGE_S = 1.0  # the load reported is averaged this long, as the servo's Present Load is smoothed
 
 
 @dataclass(frozen=True)

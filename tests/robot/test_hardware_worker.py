@@ -249,3 +249,20 @@ def test_a_robot_process_started_on_servos_left_holding_takes_them_over_then_mak
         assert not any(torque_on(emulator))
     finally:
         second.stop()
+
+
+def test_a_sustained_load_is_said_as_the_servos_smoothed_load(robot, emulator) -> None:
+    """A servo's load in diagnostics is averaged over about a second, as the simulation's: a walking step's current
+    spike is no alarm, a load held is."""
+    assert robot.submit(SetTorque(True)).accepted
+    emulator.set_load(sid("r_knee"), 3.8)  # 93 % of the XM430's stall torque, held
+    seen: list[float] = []
+
+    def warned():
+        status = robot.sample_diagnostics().find("servos/r_knee")
+        seen.append(dict(status.values)["load_pct"])
+        return status.level == Level.WARN and "heavily loaded" in status.message
+
+    wait(warned)
+    assert any(20.0 < load < 80.0 for load in seen)  # it rose to the alarm, not jumped
+    assert 80.0 <= seen[-1] <= 93.0
