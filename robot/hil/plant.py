@@ -3,7 +3,8 @@ and torque switches (as the real-robot code wrote them, byte by byte) steer the 
 actuator gains; the joints' positions, velocities and torques, the trunk's IMU and the soles' pads go back into
 the emulated devices' control tables, where the real-robot code reads them.
 
-`RealTimePhysics` steps it at the wall clock's pace, between the packets the bus answers.
+`RealTimePhysics` steps it at the wall clock's pace, between the packets the bus answers; `LockstepPhysics` one
+control period per tick of the robot. `RigLidar` casts the lidar's turns from it and sends them as an LD06 does.
 """
 
 from __future__ import annotations
