@@ -33,6 +33,7 @@ from robot.hardware.config import HardwareConfig
 from robot.hardware.xm430 import LOAD_AVERAGE_S, STALL_CURRENT_A, ServoReadings
 from robot.interface import (
     CommandReply,
+    DiagnosticStatus,
     EStop,
     Level,
     OperatorHeartbeat,
@@ -50,6 +51,7 @@ from robot.sim.backend import MujocoSimBackend
 ESTOP_TORQUE_OFF_AFTER_S = 3.0  # the controlled stop's crouch has this long before torque goes off
 DEADMAN_S = 1.5  # torque on needs an operator heartbeat at least this often (the page sends one every 250 ms)
 CONTROLLED_STOP_SPEED_RAD_S = 0.6
+BUS_WARN_SHARE = 0.8  # the bus's round trip at p99 past this share of the control period is said
 UPRIGHT_TILT_DEG = 15.0  # a fallen robot stood up again by hand may move again below this tilt
 NOT_ON_HARDWARE = "needs the IMU, cameras and foot sensors, which are not on the servo bus: simulation only for now"
 HARDWARE_WORDS = LatchWords(
@@ -479,8 +481,24 @@ class HardwareBody:
             has_imu=False,
             lost_servos=lambda: self._reading.lost if self._reading is not None else (),
             hardware_ids=[f"XM430-W350 id {j.servo_id}" for j in self.config.joints],
-            devices=self.sensing.statuses,
+            devices=lambda: [*self.sensing.statuses(), self._bus_status()],
         )
+
+    def _bus_status(self) -> DiagnosticStatus:
+        """The tick's time on the bus (servos, sensor boards, goals) and the rest, its compute: said when the bus
+        alone takes most of the control period."""
+        split = self.tick_split.summary()
+        period_ms = self.dt * 1e3
+        busy = split["bus_p99_ms"] > BUS_WARN_SHARE * period_ms
+        message = (
+            f"the bus takes {split['bus_p99_ms']:.1f} ms of the {period_ms:.0f} ms tick at p99 (compute "
+            f"{split['compute_p99_ms']:.1f} ms): raise the baud rate, lower the control rate or read less"
+            if busy
+            else f"bus {split['bus_p50_ms']:.1f} ms a tick (p99 {split['bus_p99_ms']:.1f}), compute "
+            f"{split['compute_p99_ms']:.1f} ms at p99"
+        )
+        values = tuple((key, round(value, 3)) for key, value in split.items())
+        return DiagnosticStatus("hardware/bus", Level.WARN if busy else Level.OK, message, self.config.port, values)
 
     def _servo_readings(self) -> ServoReadings:
         r = self._reading

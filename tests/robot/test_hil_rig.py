@@ -107,6 +107,9 @@ def test_the_real_robot_code_walks_through_the_rig_knows_where_it_went_and_stops
         assert np.hypot(*(np.array(state.base_position[:2]) - truth.base_position[:2])) < 0.1
         assert abs(math.remainder(state.base_yaw_rad - truth.base_yaw_rad, math.tau)) < 0.15
 
+        bus = dict(robot.sample_diagnostics().find("hardware/bus").values)  # the tick's bus round trip, said
+        assert 0 < bus["bus_p50_ms"] <= bus["bus_p99_ms"] and 0 < bus["compute_p50_ms"] <= bus["compute_p99_ms"]
+
         assert robot.submit(EStop(source="test")).accepted
         wait(lambda: not robot.state().torque_enabled)  # the controlled stop: a crouch, then torque off
         assert any(e.level == Level.WARN and "torque off" in e.message for e in robot.recent_events())
