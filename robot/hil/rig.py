@@ -14,6 +14,7 @@ from __future__ import annotations
 import importlib.util
 import os
 import shutil
+import sys
 import tempfile
 from collections.abc import Callable
 from dataclasses import replace
@@ -28,6 +29,7 @@ from robot.hil.camera import RigCamera
 from robot.hil.plant import LockstepPhysics, RealTimePhysics, RigLidar, RigPlant, RigTruth
 from robot.model.world import WorldLayout
 
+GIL_SWITCH_S = 0.0005
 # The host waits this long past a reply's wire time: the rig's devices answer from a process that shares the
 # host's cores (and between physics blocks), not within the microseconds of real servos.
 RIG_REPLY_MARGIN_MS = 10.0
@@ -88,6 +90,11 @@ def _serve_rig(
     conn: Connection, layout: WorldLayout, config: HardwareConfig, baudrate: int, wire_time: bool, lockstep: bool
 ) -> None:
     from robot.sim.backend import MujocoSimBackend  # the child's own: a spawned process starts bare
+
+    # The bus's thread answers the robot's packets; the camera's and the lidar's threads share the interpreter
+    # with it. By default a thread waits up to 5 ms for another to give the interpreter up: a reply late enough
+    # that the robot's reads time out, and its IMU is lost (0.24 s without one ended one pick of 20).
+    sys.setswitchinterval(GIL_SWITCH_S)
 
     backend = MujocoSimBackend(layout)
     standing = backend.read().joint_positions
