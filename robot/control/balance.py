@@ -60,7 +60,10 @@ class AnkleBalance:
     def correct(
         self, targets: np.ndarray, quat_wxyz: np.ndarray, gyro: np.ndarray, swing_leg: str | None = None
     ) -> np.ndarray:
-        """Targets with the ankle correction (and the swing leg's levelling, if a leg swings) added; a new array."""
+        """Targets with the ankle correction (and the swing leg's levelling, if a leg swings) added; a new array.
+        Without an IMU reading (NaN: a real robot's IMU missed a tick) there is nothing to correct by: unchanged."""
+        if not (np.isfinite(quat_wxyz).all() and np.isfinite(gyro).all()):
+            return np.array(targets, dtype=float)
         tilt = TrunkTilt.from_quat(quat_wxyz)
         pitch = self.tilt_gain * tilt.pitch + self.rate_gain * float(gyro[1])
         roll = self.tilt_gain * tilt.roll + self.rate_gain * float(gyro[0])

@@ -67,7 +67,11 @@ class LegOdometry:
         self._yaw_offset = pose.yaw - _yaw(quat_to_matrix(imu_quat))
 
     def update(self, joint_positions: np.ndarray, imu_quat: np.ndarray, foot_forces: np.ndarray) -> Pose2D:
-        """One estimate per control tick; `foot_forces` is (2, pads) for left and right."""
+        """One estimate per control tick; `foot_forces` is (2, pads) for left and right. A tick without an IMU or
+        joint reading (NaN: a real robot's sensor missed it) leaves the estimate where it was: a gap, not a NaN pose
+        the map and the navigation would keep."""
+        if not (np.isfinite(imu_quat).all() and np.isfinite(joint_positions).all()):
+            return self.pose
         imu = quat_to_matrix(imu_quat)
         rotation = _with_yaw(imu, _yaw(imu) + self._yaw_offset)
         feet, feet_rotation = self._feet_in_trunk(joint_positions)

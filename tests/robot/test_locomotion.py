@@ -122,3 +122,28 @@ def test_a_walk_is_the_same_whatever_the_process_ran_before(tmp_path) -> None:
     second, sim_second, _ = _walk(script, tmp_path / "second")
     assert first.yaw_error_rad == second.yaw_error_rad
     assert np.array_equal(sim_first.read().base_position, sim_second.read().base_position)
+
+
+def test_a_tick_without_an_imu_reading_leaves_the_pose_and_the_balance_as_they_were(layout, scene_model, tmp_path):
+    """A real robot's IMU can miss a tick (NaN): the legs' estimate holds and the ankles get no correction from it,
+    instead of a NaN pose the map would keep and NaN goals for the servos."""
+    sim = MujocoSimBackend(layout, scene_model)
+    loco = build_locomotion(sim, tmp_path, planner_process=False)
+    stand = loco.stand_targets
+    sim.reset(stand)
+    m = sim.read()
+    loco.reset_odometry(measured_pose(m), sensors(m))
+    for _ in range(20):
+        sim.write(loco.update(sensors(sim.read()), stand))
+        sim.step(DT)
+    before = loco.odometry.pose
+    blind = sensors(sim.read())
+    blind = type(blind)(blind.joint_positions, np.full(4, np.nan), np.full(3, np.nan), blind.foot_forces)
+    targets = loco.update(blind, stand)
+    assert np.isfinite(targets).all()
+    assert loco.odometry.pose == before
+    for _ in range(20):  # and it goes on from there once the IMU is back
+        sim.write(loco.update(sensors(sim.read()), stand))
+        sim.step(DT)
+    after = loco.odometry.pose
+    assert math.isfinite(after.x) and math.dist((after.x, after.y), (before.x, before.y)) < 0.02
