@@ -237,11 +237,23 @@ class DynamixelBus:
             for field, wanted in ((ct.OPERATING_MODE, POSITION_CONTROL_MODE), (ct.RETURN_DELAY_TIME, 0)):
                 value = self._read_byte(j, field)
                 if value != wanted:
-                    result, error = self.packets.write1ByteTxRx(self.port, j.servo_id, field.address, wanted)
-                    if result != COMM_SUCCESS or error & 0x7F:
-                        raise BusError(f"servo {j.servo_id} ({j.joint}): cannot set address {field.address}")
+                    self._write_byte(j, field, wanted)
                     changes.append(f"servo {j.servo_id} ({j.joint}): address {field.address} {value} -> {wanted}")
         return changes
+
+    def _write_byte(self, joint: JointServo, field: ct.Field, value: int) -> None:
+        """One byte of a servo's control table. A lost status is asked about again (the write may have landed:
+        it is read back); a servo that refuses the write, or never answers, is a `BusError`."""
+        for _ in range(PING_ATTEMPTS):
+            result, error = self.packets.write1ByteTxRx(self.port, joint.servo_id, field.address, value)
+            if result == COMM_SUCCESS and not error & 0x7F:
+                return
+            if result == COMM_SUCCESS:
+                break  # the servo answered, and refused
+            self._drop_late_reply()
+            if self._read_byte(joint, field) == value:
+                return
+        raise BusError(f"servo {joint.servo_id} ({joint.joint}): cannot set address {field.address}")
 
     def arm_watchdog(self, milliseconds: int) -> None:
         """Every servo's bus watchdog to `milliseconds` (0: off), cleared first (a tripped one takes no new

@@ -379,6 +379,9 @@ class EmulatedBus:
         if faults.drop_replies > 0:
             faults.drop_replies -= 1
             return []
+        if not is_read and faults.drop_write_replies > 0:
+            faults.drop_write_replies -= 1
+            return []
         self._line(servo.return_delay_s)
         if faults.late_replies > 0:
             faults.late_replies -= 1
@@ -556,7 +559,7 @@ class BusEmulator:
     # what tests do to the servos ---------------------------------------------------------------------------------
 
     def set_fault(self, servo_id: int, **faults: Any) -> None:
-        """dead=True, drop_replies=n, corrupt_replies=n, late_replies=n (see ServoFaults)."""
+        """dead=True, drop_replies=n, corrupt_replies=n, late_replies=n, drop_write_replies=n (see ServoFaults)."""
         for name, value in faults.items():
             self._call("fault", servo_id, name, value)
 

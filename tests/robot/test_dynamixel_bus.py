@@ -8,6 +8,7 @@ from collections.abc import Iterator
 
 import pytest
 
+from robot.hardware import control_table as ct
 from robot.hardware.bus import DynamixelBus
 from robot.hardware.bus_emulator import BusEmulator
 from robot.hardware.config import default_config
@@ -57,3 +58,12 @@ def test_prepare_survives_a_late_reply(rig) -> None:
     emulator.set_fault(bus.joints[5].servo_id, late_replies=1)
     bus.prepare()
     assert all(s.hardware_error == 0 for s in by_id(bus).values())
+
+
+def test_prepare_survives_a_write_whose_status_was_lost(rig) -> None:
+    """A rig on a busy machine lost one write's status and the server would not start ("cannot set address 9")."""
+    emulator, bus = rig
+    sid = bus.joints[5].servo_id
+    emulator.set_fault(sid, drop_write_replies=1)  # the return delay's write lands, its status is lost
+    bus.prepare()
+    assert emulator.read(sid, ct.RETURN_DELAY_TIME) == 0
