@@ -518,6 +518,8 @@ class BusEmulator:
     def __exit__(self, *exc: object) -> None:
         self.stop()
 
+    daemon_process = True  # ended with the process that made it (one that starts processes of its own cannot be)
+
     def _child(self) -> tuple[Callable[..., None], tuple]:
         """What the emulator's process runs, and its arguments after the pipe's end."""
         return _serve, (self.servo_ids, self.baudrate, self.wire_time, self.positions, self.sensors)
@@ -526,7 +528,9 @@ class BusEmulator:
         context = mp.get_context("spawn")
         parent, child = context.Pipe()
         target, args = self._child()
-        self._process = context.Process(target=target, args=(child, *args), name="dynamixel-emulator", daemon=True)
+        self._process = context.Process(
+            target=target, args=(child, *args), name="dynamixel-emulator", daemon=self.daemon_process
+        )
         self._process.start()
         child.close()
         self._conn = parent

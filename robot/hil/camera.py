@@ -8,19 +8,29 @@ import os
 import socket
 import threading
 import time
+from typing import Protocol
 
 import mujoco
 
-from robot.hil.plant import RigPlant
 from robot.perception.camera import SimRGBDCamera
 from robot.sensors.rgbd_stream import RgbdFrame, encode_frame
 
 CAMERA_HZ = 10.0
 
 
+class ScenePose(Protocol):
+    def pose_into(self, data: mujoco.MjData) -> float:
+        """The scene's pose now into `data`; returns its physics time."""
+        ...
+
+
 class RigCamera:
-    def __init__(self, plant: RigPlant, path: str, seed: int = 0, hz: float = CAMERA_HZ) -> None:
-        self.plant = plant
+    def __init__(
+        self, model: mujoco.MjModel, scene: ScenePose, path: str, seed: int = 0, hz: float = CAMERA_HZ
+    ) -> None:
+        """`scene`: where the scene's pose comes from (the physics' `SceneShare`)."""
+        self.model = model
+        self.scene = scene
         self.path = path
         self.hz = hz
         self.frames_sent = 0
@@ -43,9 +53,8 @@ class RigCamera:
             os.unlink(self.path)
 
     def _run(self) -> None:
-        model = self.plant.backend.model
-        data = mujoco.MjData(model)
-        camera = SimRGBDCamera(model, seed=self._seed)  # its GL context belongs to this thread
+        data = mujoco.MjData(self.model)
+        camera = SimRGBDCamera(self.model, seed=self._seed)  # its GL context belongs to this thread
         try:
             while not self._stop.is_set():
                 try:
@@ -63,10 +72,9 @@ class RigCamera:
         period = 1.0 / self.hz
         next_frame = time.monotonic()
         while not self._stop.is_set():
-            stamp = self.plant.pose_into(data)
-            model = self.plant.backend.model
-            mujoco.mj_kinematics(model, data)
-            mujoco.mj_camlight(model, data)
+            stamp = self.scene.pose_into(data)
+            mujoco.mj_kinematics(self.model, data)
+            mujoco.mj_camlight(self.model, data)
             image = camera.capture(data)
             frame = RgbdFrame(self.frames_sent, stamp, image.rgb, image.depth, image.intrinsics)
             try:

@@ -4,7 +4,7 @@ actuator gains; the joints' positions, velocities and torques, the trunk's IMU a
 the emulated devices' control tables, where the real-robot code reads them.
 
 `RealTimePhysics` steps it at the wall clock's pace, between the packets the bus answers; `LockstepPhysics` one
-control period per tick of the robot. `RigLidar` casts the lidar's turns from it and sends them as an LD06 does.
+control period per tick of the robot.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 import threading
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import mujoco
@@ -23,9 +23,6 @@ from robot.hardware.bus_emulator import EmulatedXM430
 from robot.hardware.config import HardwareConfig
 from robot.hardware.sensor_emulators import EmulatedFSR, EmulatedOpenCR
 from robot.model import humanoid_v1
-from robot.perception.lidar import LaserScan, SimLidar
-from robot.sensors.ld06_emulator import TURN_S as LIDAR_TURN_S
-from robot.sensors.ld06_emulator import Ld06Emulator
 from robot.sim.backend import MujocoSimBackend
 
 MAX_STEPS_PER_BLOCK = 3  # physics steps taken at once when behind (a packet waits for them); further behind, the
@@ -74,6 +71,7 @@ class RigPlant:
         self._limp = np.ones(len(names), dtype=bool)
         self._lock = threading.Lock()  # MjData: the physics thread steps it, `truth` reads it
         self.on_stand = True  # the robot hangs on its stand, unmoving, until torque first comes on
+        self.scene_out: Callable[[mujoco.MjData], None] | None = None  # where the scene's pose goes after a block
 
     def take_goals(self) -> None:
         """The servos' goals and torque switches into the actuators (a limp servo's actuator exerts nothing)."""
@@ -111,25 +109,12 @@ class RigPlant:
             )
         if self._imu is not None:
             self._imu.sense(m.imu_quat, m.imu_gyro, m.imu_accel)
+        if self.scene_out is not None:  # for the cameras and the lidar, drawn in their own process
+            with self._lock:
+                self.scene_out(self.backend.data)
         for row, side in enumerate(("left", "right")):
             if side in self._feet:
                 self._feet[side].sense(m.foot_forces[row])
-
-    def pose_into(self, data: mujoco.MjData) -> float:
-        """The scene's pose now (the robot, the objects, the boxes) into another `MjData` of the same model, for
-        a sensor to draw from outside the lock; returns the physics time."""
-        with self._lock:
-            d = self.backend.data
-            data.qpos[:] = d.qpos
-            data.mocap_pos[:] = d.mocap_pos
-            data.mocap_quat[:] = d.mocap_quat
-            data.time = d.time
-            return float(d.time)
-
-    def scan(self, lidar: SimLidar) -> LaserScan:
-        """A lidar turn from where the robot is now."""
-        with self._lock:
-            return lidar.scan(self.backend.data)
 
     def truth(self, late_blocks: int = 0) -> RigTruth:
         with self._lock:
@@ -198,29 +183,3 @@ class LockstepPhysics:
     def before_sync_read(self, address: int, length: int) -> None:
         if address <= ct.PRESENT_POSITION.address < address + length:
             self.plant.advance(self.period_s)
-
-
-class RigLidar:
-    """The lidar on the rig: an LD06 on its own pseudo-terminal (`port_name`), sending a turn every 0.1 s, each
-    cast from where the simulated robot is then."""
-
-    def __init__(self, plant: RigPlant, layout_seed: int = 0) -> None:
-        self.plant = plant
-        self._lidar = SimLidar(plant.backend.model, seed=layout_seed)
-        self._device = Ld06Emulator(plant.scan(self._lidar))
-        self.port_name = self._device.port_name
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, name="rig-lidar", daemon=True)
-
-    def start(self) -> None:
-        self._device.__enter__()
-        self._thread.start()
-
-    def stop(self) -> None:
-        self._stop.set()
-        self._thread.join(timeout=5)
-        self._device.__exit__(None, None, None)
-
-    def _run(self) -> None:
-        while not self._stop.wait(LIDAR_TURN_S):
-            self._device.set_scan(self.plant.scan(self._lidar))

@@ -11,7 +11,9 @@ unmoving, until torque first comes on (as a real one is held while it is switche
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
+import multiprocessing as mp
 import os
 import shutil
 import sys
@@ -25,11 +27,12 @@ from robot.hardware import fsr
 from robot.hardware.bus_emulator import BusEmulator, EmulatedBus, EmulatedXM430, serve_bus
 from robot.hardware.config import HardwareConfig, default_config
 from robot.hardware.sensor_emulators import EmulatedFSR, EmulatedOpenCR
-from robot.hil.camera import RigCamera
-from robot.hil.plant import LockstepPhysics, RealTimePhysics, RigLidar, RigPlant, RigTruth
+from robot.hil.plant import LockstepPhysics, RealTimePhysics, RigPlant, RigTruth
+from robot.hil.sensors import SceneShare, serve_sensors
 from robot.model.world import WorldLayout
 
 GIL_SWITCH_S = 0.0005
+SENSORS_START_S = 60.0  # the sensors' process builds its scene and its camera's renderer
 # The host waits this long past a reply's wire time: the rig's devices answer from a process that shares the
 # host's cores (and between physics blocks), not within the microseconds of real servos.
 RIG_REPLY_MARGIN_MS = 10.0
@@ -66,6 +69,8 @@ class HilRig(BusEmulator):
             [j.servo_id for j in self.config.joints], baudrate or self.config.baudrate, wire_time, sensors=True
         )
 
+    daemon_process = False  # it starts the sensors' process; `stop` (or leaving the `with`) ends both
+
     def _child(self) -> tuple[Callable[..., None], tuple]:
         return _serve_rig, (self.layout, self.config, self.baudrate, self.wire_time, self.lockstep)
 
@@ -91,9 +96,9 @@ def _serve_rig(
 ) -> None:
     from robot.sim.backend import MujocoSimBackend  # the child's own: a spawned process starts bare
 
-    # The bus's thread answers the robot's packets; the camera's and the lidar's threads share the interpreter
-    # with it. By default a thread waits up to 5 ms for another to give the interpreter up: a reply late enough
-    # that the robot's reads time out, and its IMU is lost (0.24 s without one ended one pick of 20).
+    # The bus's thread answers the robot's packets; the requests' thread shares the interpreter with it. By default
+    # a thread waits up to 5 ms for another to give the interpreter up: a reply late enough that the robot's reads
+    # time out (the camera's thread was here once, and a pick of 20 lost its IMU for 0.24 s).
     sys.setswitchinterval(GIL_SWITCH_S)
 
     backend = MujocoSimBackend(layout)
@@ -107,29 +112,46 @@ def _serve_rig(
     feet = {"left": EmulatedFSR(fsr.LEFT_FSR_ID), "right": EmulatedFSR(fsr.RIGHT_FSR_ID)}
     bus = EmulatedBus([*servos.values(), imu, *feet.values()], baudrate, wire_time)
     plant = RigPlant(backend, config, servos, imu, feet)
-    with bus.lock:
-        plant.report()
     physics = (
         LockstepPhysics(plant, 1.0 / config.control_hz) if lockstep else RealTimePhysics(plant, backend.physics_dt)
     )
     bus.attach(physics)
 
-    lidar = RigLidar(plant, layout.seed)
-    lidar.start()
+    # the lidar and the camera in a process of their own (see robot.hil.sensors), fed the scene's pose
+    context = mp.get_context("spawn")
+    model = backend.model
+    share = SceneShare(model.nq, model.nmocap)
+    plant.scene_out = share.write
+    with bus.lock:
+        plant.report()
     folder = tempfile.mkdtemp(prefix="humanoid-rig-")
-    camera = RigCamera(plant, os.path.join(folder, "camera.sock"), layout.seed)
-    camera.start()
+    here, there = context.Pipe()
+    sensors = context.Process(
+        target=serve_sensors,
+        args=(there, layout, share.name, os.path.join(folder, "camera.sock")),
+        name="rig-sensors",
+        daemon=True,
+    )
+    sensors.start()
+    there.close()
+    devices = here.recv() if here.poll(SENSORS_START_S) else {}
 
     def answer(request: tuple) -> Any:
         if request[0] == "truth":
             return plant.truth(physics.late_blocks)
         if request[0] == "devices":
-            return {"lidar": lidar.port_name, "camera": camera.path}
+            if not devices:
+                raise RuntimeError("the rig's lidar and camera did not start")
+            return devices
         return bus.control(request)
 
     try:
         serve_bus(conn, bus, answer)
     finally:
-        lidar.stop()
-        camera.stop()
+        with contextlib.suppress(OSError):
+            here.send("stop")
+        sensors.join(timeout=5)
+        if sensors.is_alive():
+            sensors.kill()
+        share.close(unlink=True)
         shutil.rmtree(folder, ignore_errors=True)
