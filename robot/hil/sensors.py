@@ -10,7 +10,6 @@ import contextlib
 import os
 import threading
 import time
-from multiprocessing import resource_tracker
 from multiprocessing.connection import Connection
 from multiprocessing.shared_memory import SharedMemory
 from typing import Any
@@ -26,16 +25,14 @@ from robot.sensors.ld06_emulator import Ld06Emulator
 
 class SceneShare:
     """The scene's pose (time, qpos, the kinematic bodies' positions and orientations) in shared memory. Made by
-    the physics' side (no `name`), attached to by name by the sensors' side. A sequence counter guards it (odd
-    while a write is under way; a reader copies again if it changed): the physics never waits for a reader."""
+    the physics' side (no `name`; it unlinks it), attached to by name by the sensors' side (a spawned process
+    shares its maker's resource tracker: it is tracked once). A sequence counter guards it (odd while a write is
+    under way; a reader copies again if it changed): the physics never waits for a reader."""
 
     def __init__(self, nq: int, nmocap: int, name: str | None = None) -> None:
         self.nq, self.nmocap = nq, nmocap
         size = (2 + nq + 7 * nmocap) * 8
         self.memory = SharedMemory(name=name, create=name is None, size=size)
-        if name is not None:  # attached, not owned: the maker unlinks it (Python 3.11 would track it twice)
-            with contextlib.suppress(Exception):
-                resource_tracker.unregister(self.memory._name, "shared_memory")  # the name it registered
         self._values = np.ndarray((2 + nq + 7 * nmocap,), dtype=np.float64, buffer=self.memory.buf)
 
     @property
