@@ -37,7 +37,7 @@ def hil_trial(seed: int, duration_s: float, lockstep: bool = True) -> dict[str, 
 
     script = random_script(np.random.default_rng(seed), duration_s)
     layout = open_floor()
-    config = rig_config()
+    config = rig_config(lockstep=lockstep)
     timeline = [(SETTLE_S, (0.0, 0.0, 0.0))]
     timeline += [(s.duration_s, (s.velocity.vx, s.velocity.vy, s.velocity.yaw_rate)) for s in script]
     timeline.append((STOP_S, (0.0, 0.0, 0.0)))

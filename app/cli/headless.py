@@ -57,7 +57,7 @@ def run_command(
         from robot.hil.rig import HilRig, rig_config
 
         layout = generate_world(seed)
-        with HilRig(layout, rig_config(), lockstep=True) as rig:
+        with HilRig(layout, rig_config(lockstep=True), lockstep=True) as rig:
             robot = HardwareWorker(rig.robot_config(), layout, disk_path=settings.data_dir, deadman_s=0.0, walk=True)
             return _run_on(robot, text, seed, settings, timeout_s, heard, rig)
     worker = RobotWorker(

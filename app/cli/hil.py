@@ -23,7 +23,7 @@ def _hil(args: argparse.Namespace, settings: Settings) -> int:
     except (ConfigError, OSError) as exc:
         print(f"cannot read {args.config}: {exc}", file=sys.stderr)
         return 2
-    config = rig_config(base)
+    config = rig_config(base, lockstep=args.lockstep)
     out = Path(args.write_config) if args.write_config else Path(settings.data_dir) / "hil-robot.toml"
     stop = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):

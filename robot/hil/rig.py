@@ -36,13 +36,18 @@ SENSORS_START_S = 60.0  # the sensors' process builds its scene and its camera's
 # The host waits this long past a reply's wire time: the rig's devices answer from a process that shares the
 # host's cores (and between physics blocks), not within the microseconds of real servos.
 RIG_REPLY_MARGIN_MS = 10.0
+# In lockstep the physics waits for the robot, so a late reply costs wall time only: the host waits long enough
+# that its own process or the rig's, paused by a busy machine, is not taken for a servo that stopped answering.
+LOCKSTEP_REPLY_MARGIN_MS = 250.0
 
 
-def rig_config(base: HardwareConfig | None = None) -> HardwareConfig:
+def rig_config(base: HardwareConfig | None = None, lockstep: bool = False) -> HardwareConfig:
     """The robot's configuration as the rig wires it: every servo of `base` (default: humanoid_v1's), the OpenCR's
-    IMU and the FSR feet on the bus, and replies waited for as long as the rig may take."""
+    IMU and the FSR feet on the bus, and replies waited for as long as the rig may take (paced in `lockstep` or
+    not)."""
     config = base or default_config()
-    return replace(config, imu="opencr", feet="fsr", reply_margin_ms=max(config.reply_margin_ms, RIG_REPLY_MARGIN_MS))
+    margin = LOCKSTEP_REPLY_MARGIN_MS if lockstep else RIG_REPLY_MARGIN_MS
+    return replace(config, imu="opencr", feet="fsr", reply_margin_ms=max(config.reply_margin_ms, margin))
 
 
 class HilRig(BusEmulator):

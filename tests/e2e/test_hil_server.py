@@ -30,7 +30,7 @@ def wait_until(predicate, timeout: float):
 
 def test_the_served_real_robot_walks_to_a_place_through_the_rig(tmp_path) -> None:
     layout = generate_world(SEED)
-    with HilRig(layout, rig_config(), lockstep=True) as rig:
+    with HilRig(layout, rig_config(lockstep=True), lockstep=True) as rig:
         robot_toml = tmp_path / "robot.toml"
         save_config(rig.robot_config(), robot_toml)
         env = {"HUMANOID_ROBOT_CONFIG": str(robot_toml), "HUMANOID_DEADMAN_S": "0", "HUMANOID_ENABLE_MIRROR": "false"}

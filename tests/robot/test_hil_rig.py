@@ -22,7 +22,7 @@ from robot.model.world import generate_world
 from robot.sensors.imu import rpy_from_quat
 
 SEED = 1
-CONFIG = rig_config()
+CONFIG = rig_config(lockstep=True)
 
 
 def wait(predicate, timeout: float = 120.0, every=None):  # generous: a loaded machine
