@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from sqlalchemy import Engine
 from sqlalchemy.orm import sessionmaker
@@ -18,15 +19,17 @@ from app.sessions.maintenance import apply_retention, close_interrupted_sessions
 from app.sessions.recorder import SessionRecorder
 from app.settings import Settings
 from app.supervisor import WorkerSupervisor
-from app.viz.mirror import FULL, LIGHT, SceneMirror, open_views
 from app.viz.mirror_process import MirrorProcess, RemoteMirror
-from app.viz.replay import SessionReplay
 from app.viz.scene_clicks import SceneClicks
 from app.viz.scene_gate import SceneGate
 from robot.interface import RobotPort
 from robot.model.world import generate_world
 from robot.process import HardwareSpec, WorkerProcess
 from robot.worker import RobotWorker
+
+if TYPE_CHECKING:  # (the 3D views' modules import viser, mjviser and trimesh: seconds, only when they are on)
+    from app.viz.mirror import SceneMirror
+    from app.viz.replay import SessionReplay
 
 log = logging.getLogger(__name__)
 
@@ -138,7 +141,7 @@ class Runtime:
         gates: dict[str, SceneGate] = {}
         mirror_process = None
         host = settings.scene_host()
-        ports = {FULL.name: settings.viser_port, LIGHT.name: settings.viser_light_port}
+        ports = {"full": settings.viser_port, "light": settings.viser_light_port}
         tls = settings.tls_files()
         if settings.enable_mirror and isinstance(worker, WorkerProcess):  # (the robot's messages feed it directly)
             mirror_process = MirrorProcess(
@@ -147,6 +150,8 @@ class Runtime:
             mirror_process.start()
             mirrors.update(mirror_process.mirrors)
         elif settings.enable_mirror:
+            from app.viz.mirror import open_views
+
             in_process, gates = open_views(
                 worker,
                 host,
@@ -160,6 +165,8 @@ class Runtime:
             mirrors.update(in_process)
         replay = None
         if settings.enable_mirror:
+            from app.viz.replay import SessionReplay
+
             replay = SessionReplay(db)
             gates["replay"] = SceneGate(
                 "replay",

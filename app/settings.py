@@ -14,7 +14,7 @@ from pydantic_settings import BaseSettings, SettingsConfigDict
 from app.web.tls import TlsFiles
 from robot.diagnostics.thresholds import Thresholds
 from robot.hardware.config import HardwareConfig, default_config, load_config
-from robot.planning.pipeline import PlannerConfig
+from robot.planning.config import PlannerConfig
 from robot.speech.robot_voice import VoiceConfig
 
 REPO_ROOT = Path(__file__).resolve().parents[1]

@@ -57,12 +57,15 @@ class ServerProcess:
         launcher: Sequence[str] = (),
         ready: Callable[[], bool] | None = None,
         startup_timeout_s: float = STARTUP_TIMEOUT_S,
+        views: bool = True,
     ) -> None:
         """`servo_port`: serve the real robot (`--backend dynamixel`) on that serial device (or the emulator's);
         `tls`: HTTPS with the robot's own certificate (its CA, `self.ca`, is what clients trust); `host`: the
         address to serve on; `launcher`: a command prefix to start it with (e.g. `ip netns exec NS`); `ready`: says
         when it answers, where this process cannot reach `host` itself (default: `/api/health` answers 200);
-        `startup_timeout_s`: how long it may take to answer."""
+        `startup_timeout_s`: how long it may take to answer; `views`: serve the 3D views (off, a page opened on it
+        has none to render: a test that does not look at them saves the processes that serve them and the
+        browser's software WebGL, about half of a browser test's CPU here)."""
         self.workdir = Path(workdir)
         self.port = free_port()
         self.viser_port = free_port()
@@ -84,6 +87,7 @@ class ServerProcess:
             "HUMANOID_AUDIO_DIR": str(self.workdir / "audio"),
             "HUMANOID_VISER_LIGHT_PORT": str(self.viser_light_port),
             "HUMANOID_REPLAY_PORT": str(self.replay_port),
+            **({} if views else {"HUMANOID_ENABLE_MIRROR": "false"}),
             **(extra_env or {}),
         }
         self._process: subprocess.Popen | None = None

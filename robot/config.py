@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from robot.diagnostics.thresholds import Thresholds
-from robot.planning.pipeline import PlannerConfig
+from robot.planning.config import PlannerConfig
 from robot.speech.robot_voice import VoiceConfig
 
 

@@ -64,7 +64,7 @@ from robot.interface import (
     StopTeleop,
     Teleop,
 )
-from robot.planning.pipeline import PlannerConfig
+from robot.planning.config import PlannerConfig
 from robot.speech.robot_voice import VoiceConfig
 from robot.state_board import StateBoard
 from robot.telemetry import TelemetryBatch, TelemetryRing

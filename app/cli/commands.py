@@ -28,7 +28,7 @@ def _serve(args: argparse.Namespace, settings: Settings) -> int:
     http_port, device = _split_port(args.port)
     overrides = {
         "seed": args.seed,
-        "enable_mirror": not args.no_mirror,
+        "enable_mirror": False if args.no_mirror else None,  # (else HUMANOID_ENABLE_MIRROR's)
         "host": args.host,
         "port": args.http_port or http_port,
         "backend": args.backend,

@@ -10,7 +10,7 @@ import time
 import httpx
 
 from robot.interface import DiagnosticStatus, Level
-from robot.planning.pipeline import PlannerConfig
+from robot.planning.config import PlannerConfig
 
 
 class PlannerLink:

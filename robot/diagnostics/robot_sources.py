@@ -17,7 +17,7 @@ from robot.diagnostics.monitor import DiagnosticsMonitor
 from robot.diagnostics.thresholds import Thresholds
 from robot.hardware.xm430 import ServoReadings
 from robot.interface import DiagnosticArray, DiagnosticStatus, Level, PerceptionState, PowerState, SensorFeed
-from robot.planning.pipeline import PlannerConfig
+from robot.planning.config import PlannerConfig
 
 
 @dataclass

@@ -5,34 +5,13 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Literal
 
 from robot.interface import Plan
+from robot.planning.config import BACKENDS, PlannerConfig
 from robot.planning.context import PlanningContext
 from robot.planning.planner import ClarificationNeeded, Planner, PlanningError
 from robot.planning.rules import RulesPlanner
 from robot.planning.validator import validate_plan
-
-Backend = Literal["rules", "openai", "local"]
-BACKENDS: tuple[Backend, ...] = ("rules", "openai", "local")
-
-
-@dataclass(frozen=True)
-class PlannerConfig:
-    """Plain values (they cross to the worker's process): which backend, and how to reach its model."""
-
-    backend: Backend = "rules"
-    openai_base_url: str = "http://127.0.0.1:8080/v1"
-    openai_api_key: str = ""
-    openai_model: str = "llama-3.3-70b-versatile"
-    openai_timeout_s: float = 20.0
-    openai_response_format: Literal["auto", "json_schema", "json_object", "none"] = "auto"
-    local_model_path: str = ""
-    local_threads: int | None = None
-    local_timeout_s: float = 20.0
-    local_chat_format: str = ""  # for a GGUF without a chat template; "" chooses from its model family
-    max_repairs: int = 1  # re-asks of an LLM whose plan does not validate, with the errors
-    fallback_to_rules: bool = True
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,7 @@ playwright_api = pytest.importorskip("playwright.sync_api")
 
 @pytest.fixture(scope="module")
 def page(tmp_path_factory):
-    with ServerProcess(tmp_path_factory.mktemp("server")) as server, playwright_api.sync_playwright() as p:
+    with ServerProcess(tmp_path_factory.mktemp("server"), views=False) as server, playwright_api.sync_playwright() as p:
         browser = launch_chromium(p)
         page = browser.new_page(viewport={"width": 1400, "height": 900})
         page.goto(server.url)

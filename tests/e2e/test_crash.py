@@ -12,8 +12,6 @@ from harness.server import ServerProcess
 
 pytestmark = pytest.mark.slow
 
-NO_VIEWS = {"HUMANOID_ENABLE_MIRROR": "false"}
-
 
 def _wait(predicate, timeout_s: float, what: str):
     deadline = time.monotonic() + timeout_s
@@ -26,7 +24,7 @@ def _wait(predicate, timeout_s: float, what: str):
 
 
 def test_a_killed_server_leaves_its_session_intact_up_to_the_last_second(tmp_path) -> None:
-    first = ServerProcess(tmp_path, extra_env=NO_VIEWS).__enter__()
+    first = ServerProcess(tmp_path, views=False).__enter__()
     try:
         session_id = first.get("/api/health")["session_id"]
         reply = first.post("/api/commands", json={"text": "go to the charging dock"})
@@ -50,7 +48,7 @@ def test_a_killed_server_leaves_its_session_intact_up_to_the_last_second(tmp_pat
     finally:
         first.__exit__(None, None, None)
 
-    with ServerProcess(tmp_path, extra_env=NO_VIEWS) as second:
+    with ServerProcess(tmp_path, views=False) as second:
         assert second.get("/api/health")["session_id"] != session_id
         crashed = second.get(f"/api/sessions/{session_id}")
         assert crashed["outcome"] == "interrupted" and crashed["ended_at"] is not None

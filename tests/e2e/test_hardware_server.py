@@ -52,7 +52,7 @@ def test_the_real_robot_from_the_page_torque_the_measured_pose_and_the_deadman(t
         # a slow test machine answers late: more margin than the 2 ms a real servo gets
         save_config(dataclasses.replace(config, port=emulator.port_name, reply_margin_ms=100.0), robot_toml)
         env = {"HUMANOID_ROBOT_CONFIG": str(robot_toml), "HUMANOID_DEADMAN_S": "1.5"}
-        with ServerProcess(tmp_path / "server", extra_env=env, servo_port=emulator.port_name) as server:
+        with ServerProcess(tmp_path / "server", extra_env=env, servo_port=emulator.port_name, views=False) as server:
             state = server.get("/api/state?qpos=true")
             assert state["torque_enabled"] is False
             scene = MujocoSimBackend(generate_world(0)).model
@@ -86,7 +86,7 @@ def hardware_server(tmp_path, emulator: BusEmulator) -> Iterator[ServerProcess]:
     robot_toml = tmp_path / "robot.toml"
     save_config(dataclasses.replace(default_config(), port=emulator.port_name, reply_margin_ms=100.0), robot_toml)
     env = {"HUMANOID_ROBOT_CONFIG": str(robot_toml), "HUMANOID_DEADMAN_S": "1.5"}
-    with ServerProcess(tmp_path / "server", extra_env=env, servo_port=emulator.port_name) as server:
+    with ServerProcess(tmp_path / "server", extra_env=env, servo_port=emulator.port_name, views=False) as server:
         yield server
 
 

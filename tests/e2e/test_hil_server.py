@@ -33,8 +33,10 @@ def test_the_served_real_robot_walks_to_a_place_through_the_rig(tmp_path) -> Non
     with HilRig(layout, rig_config(lockstep=True), lockstep=True) as rig:
         robot_toml = tmp_path / "robot.toml"
         save_config(rig.robot_config(), robot_toml)
-        env = {"HUMANOID_ROBOT_CONFIG": str(robot_toml), "HUMANOID_DEADMAN_S": "0", "HUMANOID_ENABLE_MIRROR": "false"}
-        with ServerProcess(tmp_path / "server", seed=SEED, extra_env=env, servo_port=rig.port_name) as server:
+        env = {"HUMANOID_ROBOT_CONFIG": str(robot_toml), "HUMANOID_DEADMAN_S": "0"}
+        with ServerProcess(
+            tmp_path / "server", seed=SEED, extra_env=env, servo_port=rig.port_name, views=False
+        ) as server:
             assert server.post("/api/torque", json={"enabled": True}).status_code == 200
             reply = server.post("/api/commands", json={"text": "go to the charging dock"})
             assert reply.status_code == 202, reply.text

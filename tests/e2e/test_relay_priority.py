@@ -15,7 +15,7 @@ pytestmark = pytest.mark.slow
 
 
 def test_the_event_loop_runs_at_a_real_time_priority_that_its_threads_and_children_do_not_inherit(tmp_path) -> None:
-    with ServerProcess(tmp_path, extra_env={"HUMANOID_ENABLE_MIRROR": "false"}) as server:
+    with ServerProcess(tmp_path, views=False) as server:
         server.get("/api/config")  # a plain (not async) endpoint: served on a worker thread the loop starts now
         health = server.get("/api/health")
         if os.geteuid() != 0:

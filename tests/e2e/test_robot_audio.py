@@ -117,7 +117,7 @@ def test_the_robot_hears_a_command_with_its_microphone_and_answers_aloud(tmp_pat
     sync_api = pytest.importorskip("playwright.sync_api")
     with (
         RoomMicrophone(pipe) as room,
-        ServerProcess(tmp_path / "server", extra_env=env) as server,
+        ServerProcess(tmp_path / "server", extra_env=env, views=False) as server,
         sync_api.sync_playwright() as playwright,
     ):
         config = server.get("/api/config")
