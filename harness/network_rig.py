@@ -259,7 +259,6 @@ def cut_while_driving(link: ImpairedLink, operator: FarEnd, watch: EventWatch, c
             stopping = watch.next(STOP_KINDS, cut_s, EVENT_TIMEOUT_S)
             delays.append(None if stopping is None else round((stopping["wall_time_s"] - cut_s) * 1e3, 1))
             kinds.append(None if stopping is None else stopping["kind"])
-            # (teleop that comes back before the walk has ended resumes it without a "teleop/started")
             if watch.next({"teleop/ended"}, cut_s, EVENT_TIMEOUT_S) is None:
                 raise RuntimeError(f"the walk did not end within {EVENT_TIMEOUT_S:.0f} s of the cut")
             time.sleep(max(0.0, cut_s + CUT_HOLD_S - time.time()))

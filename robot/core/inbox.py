@@ -33,11 +33,12 @@ class MotionInbox:
         return self._teleop_active
 
     def teleop(self, velocity: Velocity) -> bool:
-        """The operator drives (repeat within TELEOP_TIMEOUT_S); True when this starts a teleop session."""
+        """The operator drives (repeat within TELEOP_TIMEOUT_S); True when this starts teleop: a new session, or
+        input back after the deadman or a release stopped it (the walk resumes: say so, as at a start)."""
         with self._lock:
+            started = not self._teleop_active or self._teleop_deadline is None
             self._teleop_velocity = velocity
             self._teleop_deadline = self._clock() + TELEOP_TIMEOUT_S
-            started = not self._teleop_active
             self._teleop_active = True
         return started
 

@@ -1,17 +1,17 @@
-"""`humanoid behaviours list` and `run`, in a subprocess as a user runs them."""
+"""`humanoid behaviours list` and `run`, in a subprocess as a user runs them (listing and refusing: in this process)."""
 
 from __future__ import annotations
 
 import json
 import sqlite3
 
-from tests.app.test_cli import humanoid
+from tests.app.test_cli import here, humanoid
 
 RUN_KEYS = {"success", "fell", "sim_time_s", "wall_time_s", "feedback", "session_id"}
 
 
 def test_list_names_every_behaviour_with_its_typed_parameters(tmp_path) -> None:
-    done = humanoid(tmp_path, "behaviours", "list", "--json")
+    done = here(tmp_path, "behaviours", "list", "--json")
     assert done.returncode == 0, done.stderr
     listed = {b["name"]: b for b in json.loads(done.stdout)["behaviours"]}
     assert {"fetch", "tour", "patrol", "demo"} <= listed.keys()
@@ -22,11 +22,11 @@ def test_list_names_every_behaviour_with_its_typed_parameters(tmp_path) -> None:
 
 
 def test_run_refuses_a_bad_parameter_naming_it(tmp_path) -> None:
-    done = humanoid(tmp_path, "behaviours", "run", "patrol", "--set", "laps=-1", "--json")
+    done = here(tmp_path, "behaviours", "run", "patrol", "--set", "laps=-1", "--json")
     assert done.returncode == 2
     result = json.loads(done.stdout)
     assert result["success"] is False and result["errors"][0].startswith("laps:")
-    assert humanoid(tmp_path, "behaviours", "run", "patrol", "--set", "laps").returncode == 2
+    assert here(tmp_path, "behaviours", "run", "patrol", "--set", "laps").returncode == 2
 
 
 def test_run_a_tour_headless_and_keep_it_with_the_session(tmp_path) -> None:

@@ -8,6 +8,7 @@ import sqlite3
 import pytest
 
 from tests.support.cli import humanoid as run_humanoid
+from tests.support.cli import humanoid_here
 
 RESULT_KEYS = {
     "success",
@@ -26,6 +27,12 @@ def humanoid(tmp_path, *args: str, timeout_s: float = 120.0, env: dict[str, str]
     """The command with its database and recordings in this test's folder."""
     own = {"DATABASE_URL": f"sqlite:///{tmp_path / 'cli.db'}", "HUMANOID_AUDIO_DIR": str(tmp_path / "audio")}
     return run_humanoid(*args, env={**own, **(env or {})}, timeout_s=timeout_s)
+
+
+def here(tmp_path, *args: str):
+    """The same, in this process (a command that starts no robot): its output and exit code as a process's."""
+    own = {"DATABASE_URL": f"sqlite:///{tmp_path / 'cli.db'}", "HUMANOID_AUDIO_DIR": str(tmp_path / "audio")}
+    return humanoid_here(*args, env=own)
 
 
 def test_run_prints_the_result_and_records_a_session(tmp_path) -> None:
@@ -93,7 +100,7 @@ def test_run_with_an_unknown_object_fails_clearly(tmp_path) -> None:
 
 
 def test_bad_arguments_are_refused(tmp_path) -> None:
-    done = humanoid(tmp_path, "run", "say hi", "--seed", "-2")
+    done = here(tmp_path, "run", "say hi", "--seed", "-2")
     assert done.returncode == 2 and "--seed must be >= 0" in done.stderr
 
 
@@ -126,13 +133,13 @@ def test_bench_walk_writes_its_figures_as_json(tmp_path) -> None:
 
 
 def test_bench_capstone_names_the_tasks_it_knows_when_given_another(tmp_path) -> None:
-    done = humanoid(tmp_path, "bench", "capstone", "--tasks", "pick,juggle", "--seeds", "1")
+    done = here(tmp_path, "bench", "capstone", "--tasks", "pick,juggle", "--seeds", "1")
     assert done.returncode == 2
     assert "juggle" in done.stderr and "pick, bring, blocked" in done.stderr
 
 
 def test_plan_prints_the_validated_plan_in_the_seeds_format_without_moving_anything(tmp_path) -> None:
-    done = humanoid(tmp_path, "plan", "bring the red mug to the living-room table", "--json")
+    done = here(tmp_path, "plan", "bring the red mug to the living-room table", "--json")
     assert done.returncode == 0, done.stderr
     assert json.loads(done.stdout) == [
         {"action": "navigate_to", "target": "kitchen counter"},
@@ -142,11 +149,11 @@ def test_plan_prints_the_validated_plan_in_the_seeds_format_without_moving_anyth
         {"action": "place_object", "location": "living-room table"},
         {"action": "say", "text": "I have put the red mug on the living-room table."},
     ]
-    holding = humanoid(tmp_path, "plan", "put it on the counter", "--holding", "mug", "--json")
+    holding = here(tmp_path, "plan", "put it on the counter", "--holding", "mug", "--json")
     assert [s["action"] for s in json.loads(holding.stdout)] == ["navigate_to", "place_object", "say"]
-    unknown = humanoid(tmp_path, "plan", "pick up the purple elephant", "--json")
+    unknown = here(tmp_path, "plan", "pick up the purple elephant", "--json")
     assert unknown.returncode == 1 and "unknown object 'purple elephant'" in unknown.stderr and unknown.stdout == ""
-    asked = humanoid(tmp_path, "plan", "go to the kitchen table", "--json")
+    asked = here(tmp_path, "plan", "go to the kitchen table", "--json")
     assert asked.returncode == 1 and json.loads(asked.stdout) == {
         "clarify": "Did you mean the living-room table or the kitchen counter?",
         "options": ["living-room table", "kitchen counter"],
@@ -227,37 +234,37 @@ def test_transcribe_hears_everyday_wording_with_whisper_by_default_and_reports_a
 
 
 def test_sessions_are_listed_shown_exported_imported_and_deleted_from_the_command_line(tmp_path) -> None:
-    assert humanoid(tmp_path, "run", "say hello from the cli", "--json").returncode == 0
-    listed = json.loads(humanoid(tmp_path, "sessions", "list", "--json").stdout)
+    assert humanoid(tmp_path, "run", "say hello from the cli", "--json").returncode == 0  # (the rest: in this process)
+    listed = json.loads(here(tmp_path, "sessions", "list", "--json").stdout)
     assert listed["total"] == 1 and listed["items"][0]["first_command"] == "say hello from the cli"
-    assert json.loads(humanoid(tmp_path, "sessions", "list", "--json", "--had-estop", "yes").stdout)["total"] == 0
-    shown = humanoid(tmp_path, "sessions", "show", "1")
+    assert json.loads(here(tmp_path, "sessions", "list", "--json", "--had-estop", "yes").stdout)["total"] == 0
+    shown = here(tmp_path, "sessions", "show", "1")
     assert shown.returncode == 0 and '"say hello from the cli" from cli: accepted' in shown.stdout
     for fmt in ("json", "mcap"):
         out = tmp_path / f"s1.{fmt}"
-        done = humanoid(tmp_path, "sessions", "export", "1", "--format", fmt, "-o", str(out))
+        done = here(tmp_path, "sessions", "export", "1", "--format", fmt, "-o", str(out))
         assert done.returncode == 0, done.stderr
         assert out.stat().st_size > 10_000
     assert (tmp_path / "s1.mcap").read_bytes()[:8] == b"\x89MCAP0\r\n"
-    imported = humanoid(tmp_path, "sessions", "import", str(tmp_path / "s1.json"), "--json")
+    imported = here(tmp_path, "sessions", "import", str(tmp_path / "s1.json"), "--json")
     assert json.loads(imported.stdout) == {"session_id": 2}
-    assert humanoid(tmp_path, "sessions", "delete", "2").returncode == 1  # asks for --yes first
-    assert humanoid(tmp_path, "sessions", "delete", "2", "--yes").returncode == 0
-    assert humanoid(tmp_path, "sessions", "export", "9", "-o", str(tmp_path / "x.json")).returncode == 1
+    assert here(tmp_path, "sessions", "delete", "2").returncode == 1  # asks for --yes first
+    assert here(tmp_path, "sessions", "delete", "2", "--yes").returncode == 0
+    assert here(tmp_path, "sessions", "export", "9", "-o", str(tmp_path / "x.json")).returncode == 1
     bad = tmp_path / "bad.json"
     bad.write_text('{"format": "zip"}')
-    refused = humanoid(tmp_path, "sessions", "import", str(bad))
+    refused = here(tmp_path, "sessions", "import", str(bad))
     assert refused.returncode == 1 and "not a session export" in refused.stderr
-    assert json.loads(humanoid(tmp_path, "sessions", "list", "--json").stdout)["total"] == 1
+    assert json.loads(here(tmp_path, "sessions", "list", "--json").stdout)["total"] == 1
 
 
 def test_describe_writes_the_robots_urdf_alone(tmp_path) -> None:
     import yourdfpy
 
-    done = humanoid(tmp_path, "describe", "--urdf", "-o", str(tmp_path / "robot.urdf"))
+    done = here(tmp_path, "describe", "--urdf", "-o", str(tmp_path / "robot.urdf"))
     assert done.returncode == 0, done.stderr
     assert done.stdout == ""  # the file alone: nothing else on standard output
     robot = yourdfpy.URDF.load(str(tmp_path / "robot.urdf"), load_meshes=False, load_collision_meshes=False)
     assert robot.robot.name == "humanoid_v1" and len(robot.actuated_joint_names) == 24
-    summary = humanoid(tmp_path, "describe")
+    summary = here(tmp_path, "describe")
     assert summary.returncode == 0 and "r_knee" in summary.stdout

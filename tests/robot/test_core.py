@@ -306,6 +306,18 @@ def test_the_inbox_gives_the_plan_or_the_operator_and_its_deadman_stops_teleop_o
     assert inbox.teleop_ended() and not inbox.teleop_ended()
 
 
+def test_teleop_input_back_after_the_deadman_is_a_start_again_and_steady_input_is_not() -> None:
+    now = [0.0]
+    inbox = MotionInbox(threading.RLock(), lambda: now[0])
+    assert inbox.teleop(Velocity(0.1, 0.0, 0.0))
+    now[0] = TELEOP_TIMEOUT_S + 0.01
+    assert inbox.take(plan_running=False, latched=False)[2]  # the deadman stops the walk ...
+    assert inbox.teleop(Velocity(0.1, 0.0, 0.0))  # ... input back before it has ended: the walk resumes, said
+    assert inbox.take(plan_running=False, latched=False) == (Velocity(0.1, 0.0, 0.0), False, False)
+    assert not inbox.teleop(Velocity(0.1, 0.0, 0.0))
+    assert inbox.release_teleop() and inbox.teleop(Velocity(0.1, 0.0, 0.0))  # after a release, too
+
+
 def test_the_loop_survives_a_failing_tick_and_wakes_early_for_a_stop() -> None:
     ticks: list[int] = []
     errors: list[Exception] = []
