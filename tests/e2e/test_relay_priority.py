@@ -18,6 +18,7 @@ def test_the_event_loop_runs_at_a_real_time_priority_that_its_threads_and_childr
     with ServerProcess(tmp_path, views=False) as server:
         server.get("/api/config")  # a plain (not async) endpoint: served on a worker thread the loop starts now
         health = server.get("/api/health")
+        assert health["mirrors"] == {}  # (HUMANOID_ENABLE_MIRROR=false, as `views=False` sets it, is heeded)
         if os.geteuid() != 0:
             assert "normal priority" in health["relay_priority"]
             pytest.skip("real-time scheduling needs root or CAP_SYS_NICE")
