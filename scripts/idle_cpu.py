@@ -1,7 +1,7 @@
 """What a `humanoid serve` costs before anyone uses it: each of its processes' CPU to start (until it answers) and
 while idle (no page open), as shares of one core.
 
-    .venv/bin/python scripts/idle_cpu.py --seconds 20
+    .venv/bin/python scripts/idle_cpu.py --seconds 20 [--no-views]
 """
 
 from __future__ import annotations
@@ -49,8 +49,8 @@ def _cpu(server: ServerProcess) -> dict[int, tuple[str, float]]:
     return times
 
 
-def measure(seconds: float) -> dict:
-    with tempfile.TemporaryDirectory() as tmp, ServerProcess(Path(tmp)) as server:
+def measure(seconds: float, views: bool = True) -> dict:
+    with tempfile.TemporaryDirectory() as tmp, ServerProcess(Path(tmp), views=views) as server:
         started = _cpu(server)
         time.sleep(SETTLE_S)
         before = _cpu(server)
@@ -71,8 +71,9 @@ def measure(seconds: float) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seconds", type=float, default=20.0)
+    parser.add_argument("--no-views", action="store_true", help="serve without the 3D views (as most tests do)")
     args = parser.parse_args()
-    print(json.dumps(measure(args.seconds), indent=2))
+    print(json.dumps(measure(args.seconds, views=not args.no_views), indent=2))
 
 
 if __name__ == "__main__":
