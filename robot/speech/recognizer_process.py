@@ -27,6 +27,10 @@ STARTUP_TIMEOUT_S = 60.0
 _HEADER = struct.Struct("<I")
 
 
+class RecognizerGone(ASRError):
+    """The recogniser's process had exited (killed, crashed): a new one can take the same utterance."""
+
+
 def _send(stream: IO[bytes], message: Any) -> None:
     data = pickle.dumps(message, protocol=pickle.HIGHEST_PROTOCOL)
     stream.write(_HEADER.pack(len(data)) + data)
@@ -97,7 +101,7 @@ class RecognizerProcess:
             try:
                 _send(self._in, ("feed", samples))
             except (OSError, ValueError) as exc:
-                raise ASRError(f"the recogniser process has gone: {exc}") from exc
+                raise RecognizerGone(f"the recogniser process has gone: {exc}") from exc
 
     def finish(self, timeout_s: float | None = None) -> StopVerdict:
         """The spotter's verdict on what was fed since the last `finish`."""
@@ -113,7 +117,7 @@ class RecognizerProcess:
                     raise ASRError(f"the recogniser gave no answer within {timeout_s:g} s: it was stopped")
                 reply = self._reply()
             except (OSError, ValueError) as exc:
-                raise ASRError(f"the recogniser process has gone: {exc}") from exc
+                raise RecognizerGone(f"the recogniser process has gone: {exc}") from exc
         if reply[0] != "answer":
             raise ASRError(reply[1])
         return reply[1]
@@ -132,7 +136,7 @@ class RecognizerProcess:
         try:
             return _receive(self._out)
         except EOFError as exc:
-            raise ASRError(f"the recogniser process exited with code {self._process.wait()}") from exc
+            raise RecognizerGone(f"the recogniser process exited with code {self._process.wait()}") from exc
 
 
 def _serve(stdin: IO[bytes], stdout: IO[bytes]) -> None:

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import os
+import signal
 import threading
 import time
 import wave
@@ -18,7 +20,7 @@ from robot.planning.world_context import WorldContext
 from robot.speech import devices
 from robot.speech.audio import Audio, add_noise
 from robot.speech.devices import AudioDevice, find_device
-from robot.speech.recognizer_process import RecognizerProcess
+from robot.speech.recognizer_process import RecognizerGone, RecognizerProcess
 from robot.speech.robot_voice import RobotVoice, VoiceConfig
 from robot.speech.tts import synthesize_audio
 from robot.speech.vad import UtteranceDetector
@@ -267,6 +269,9 @@ def test_the_recogniser_process_answers_like_the_engine_and_reports_a_bad_engine
     try:
         transcript = process.transcribe(synthesize_audio("bring me the green apple", "en-us", 150))
         assert transcript.text == "bring me the green apple" and transcript.in_grammar
+        os.kill(process.pid, signal.SIGKILL)  # killed (or crashed) before or while it decodes: gone, not a bad answer
+        with pytest.raises(RecognizerGone, match=r"exited with code -9|has gone"):
+            process.transcribe(synthesize_audio("bring me the green apple", "en-us", 150))
     finally:
         process.close()
     with pytest.raises(Exception, match="unknown speech engine 'klingon'"):

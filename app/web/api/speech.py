@@ -19,7 +19,7 @@ from robot.model.world import generate_world
 from robot.planning.world_context import WorldContext
 from robot.speech.asr import ASRError
 from robot.speech.audio import AudioError, from_pcm16, read_wav_bytes
-from robot.speech.recognizer_process import RecognizerProcess
+from robot.speech.recognizer_process import RecognizerGone, RecognizerProcess
 from robot.speech.stop_word import is_stop_utterance
 from robot.speech.tts import MAX_TEXT_CHARS, TTSError, synthesize
 
@@ -84,11 +84,19 @@ async def transcribe(request: Request, rt: RuntimeDep) -> dict[str, Any]:
     path = save_recording(rt.settings.audio_dir, rt.recorder.session_id, audio.wav_bytes())
     latched = None
     try:
-        engine = await run_in_threadpool(recognizer, rt)
-        if rt.settings.spoken_stop:
-            verdict = await run_in_threadpool(engine.spot, audio, rt.settings.asr_timeout_s)
-            latched = await _latch(rt) if verdict.stop else None
-        transcript = await run_in_threadpool(engine.transcribe, audio, rt.settings.asr_timeout_s)
+        for attempt in (1, 2):  # a recogniser that had died (or died on it) hands the recording to a new one, once
+            engine = await run_in_threadpool(recognizer, rt)
+            try:
+                if rt.settings.spoken_stop:
+                    verdict = await run_in_threadpool(engine.spot, audio, rt.settings.asr_timeout_s)
+                    if verdict.stop and latched is None:
+                        latched = await _latch(rt)
+                transcript = await run_in_threadpool(engine.transcribe, audio, rt.settings.asr_timeout_s)
+                break
+            except RecognizerGone as exc:
+                if attempt == 2:
+                    raise
+                log.warning("%s: the recording goes to a new recogniser", exc)
     except ASRError as exc:
         log.error("speech recognition failed: %s", exc)
         rt.recorder.record_transcript(_unheard(audio.duration_s, rt.settings.asr_engine), "browser", path)
