@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from robot.control.clamp import clamp
 from robot.model import humanoid_v1
 
 # Gains measured in the walking prototype (shared FINDINGS.md): 0.3 x tilt + 0.02 x tilt rate.
@@ -68,10 +69,10 @@ class AnkleBalance:
         pitch = self.tilt_gain * tilt.pitch + self.rate_gain * float(gyro[1])
         roll = self.tilt_gain * tilt.roll + self.rate_gain * float(gyro[0])
         out = np.array(targets, dtype=float)
-        out[self._pitch_idx] += np.clip(pitch, -MAX_CORRECTION_RAD, MAX_CORRECTION_RAD) * self._pitch_sign
-        out[self._roll_idx] += np.clip(roll, -MAX_CORRECTION_RAD, MAX_CORRECTION_RAD) * self._roll_sign
+        out[self._pitch_idx] += clamp(pitch, -MAX_CORRECTION_RAD, MAX_CORRECTION_RAD) * self._pitch_sign
+        out[self._roll_idx] += clamp(roll, -MAX_CORRECTION_RAD, MAX_CORRECTION_RAD) * self._roll_sign
         if swing_leg is not None:
             # turn the whole leg against the trunk's pitch: the foot keeps its planned world placement and stays flat
-            level = np.clip(self.swing_gain * tilt.pitch, -MAX_LEVELLING_RAD, MAX_LEVELLING_RAD)
+            level = clamp(self.swing_gain * tilt.pitch, -MAX_LEVELLING_RAD, MAX_LEVELLING_RAD)
             out[self._hip_pitch_idx[swing_leg]] -= level * self._hip_pitch_sign[swing_leg]
         return out

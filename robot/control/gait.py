@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 import placo
 
+from robot.control.clamp import clamp
 from robot.model import humanoid_v1
 from robot.user_cache import user_cache_dir
 
@@ -167,9 +168,9 @@ class StepCommand:
 
     def clipped(self) -> StepCommand:
         return StepCommand(
-            float(np.clip(self.dx, -MAX_STEP_BACKWARD_M, MAX_STEP_FORWARD_M)),
-            float(np.clip(self.dy, -MAX_STEP_SIDE_M, MAX_STEP_SIDE_M)),
-            float(np.clip(self.dtheta, -MAX_STEP_TURN_RAD, MAX_STEP_TURN_RAD)),
+            clamp(self.dx, -MAX_STEP_BACKWARD_M, MAX_STEP_FORWARD_M),
+            clamp(self.dy, -MAX_STEP_SIDE_M, MAX_STEP_SIDE_M),
+            clamp(self.dtheta, -MAX_STEP_TURN_RAD, MAX_STEP_TURN_RAD),
         )
 
 
@@ -230,8 +231,9 @@ def _first_flying_side(command: StepCommand) -> placo.HumanoidRobot_Side:
 class GaitPlannerCore:
     """placo's walk pattern generator and the current trajectory; single-threaded, no I/O."""
 
-    def __init__(self, model_path: Path, dt: float) -> None:
+    def __init__(self, model_path: Path, dt: float, horizon_s: float = SEGMENT_HORIZON_S) -> None:
         self.dt = dt
+        self.horizon_s = horizon_s
         self.parameters = walk_parameters()
         self.robot = load_placo_robot(model_path)
         self._solver = placo.KinematicsSolver(self.robot)
@@ -318,9 +320,9 @@ class GaitPlannerCore:
         t0: float,
         ends_standing: bool,
         plan_ms: float,
-        horizon: float = SEGMENT_HORIZON_S,
+        horizon: float | None = None,
     ) -> GaitSegment:
-        t_end = min(trajectory.t_end, t0 + horizon)
+        t_end = min(trajectory.t_end, t0 + (self.horizon_s if horizon is None else horizon))
         n = max(1, math.floor((t_end - t0) / self.dt + 1e-9) + 1)
         left = np.empty((n, 4, 4))
         right = np.empty((n, 4, 4))

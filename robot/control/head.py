@@ -12,6 +12,7 @@ import math
 import mujoco
 import numpy as np
 
+from robot.control.clamp import clamp
 from robot.model import humanoid_v1
 
 # Looking 17 deg down: the floor from 1 m ahead, and table tops across the room.
@@ -33,7 +34,7 @@ class HeadController:
     def _clip(self, pan: float, tilt: float) -> tuple[float, float]:
         if not (math.isfinite(pan) and math.isfinite(tilt)):
             raise ValueError("head angles must be finite")
-        return (float(np.clip(pan, *self.pan_limits)), float(np.clip(tilt, *self.tilt_limits)))
+        return (clamp(pan, *self.pan_limits), clamp(tilt, *self.tilt_limits))
 
     def point(self, pan: float, tilt: float) -> tuple[float, float]:
         """Aim at these joint angles (clipped to the joint limits); returns the target actually set."""
@@ -68,8 +69,8 @@ class HeadController:
     def update(self, dt: float) -> tuple[float, float]:
         """The head's joint targets for this tick, moving towards the target at the speed limit."""
         step = MAX_SPEED_RAD_S * dt
-        pan = self.command[0] + float(np.clip(self.target[0] - self.command[0], -step, step))
-        tilt = self.command[1] + float(np.clip(self.target[1] - self.command[1], -step, step))
+        pan = self.command[0] + clamp(self.target[0] - self.command[0], -step, step)
+        tilt = self.command[1] + clamp(self.target[1] - self.command[1], -step, step)
         self.command = (pan, tilt)
         return self.command
 

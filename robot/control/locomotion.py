@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from robot.control.balance import AnkleBalance
+from robot.control.clamp import clamp
 from robot.control.gait import (
     MAX_STEP_BACKWARD_M,
     MAX_STEP_FORWARD_M,
@@ -49,13 +50,12 @@ class Velocity:
 
 def clip_velocity(command: Velocity, limits: VelocityLimits) -> Velocity:
     """`command` within the limits; ValueError if it is not finite."""
-    values = np.array([command.vx, command.vy, command.yaw_rate], dtype=float)
-    if not np.all(np.isfinite(values)):
+    if not all(math.isfinite(v) for v in (command.vx, command.vy, command.yaw_rate)):
         raise ValueError("velocity command must be finite")
     return Velocity(
-        float(np.clip(command.vx, -limits.vx_backward, limits.vx_forward)),
-        float(np.clip(command.vy, -limits.vy, limits.vy)),
-        float(np.clip(command.yaw_rate, -limits.yaw_rate, limits.yaw_rate)),
+        clamp(command.vx, -limits.vx_backward, limits.vx_forward),
+        clamp(command.vy, -limits.vy, limits.vy),
+        clamp(command.yaw_rate, -limits.yaw_rate, limits.yaw_rate),
     )
 
 
@@ -76,9 +76,9 @@ class VelocityShaper:
         lim, cur, tgt = self.limits, self.current, self.target
         dv, dw = lim.accel * dt, lim.yaw_accel * dt
         self.current = Velocity(
-            cur.vx + float(np.clip(tgt.vx - cur.vx, -dv, dv)),
-            cur.vy + float(np.clip(tgt.vy - cur.vy, -dv, dv)),
-            cur.yaw_rate + float(np.clip(tgt.yaw_rate - cur.yaw_rate, -dw, dw)),
+            cur.vx + clamp(tgt.vx - cur.vx, -dv, dv),
+            cur.vy + clamp(tgt.vy - cur.vy, -dv, dv),
+            cur.yaw_rate + clamp(tgt.yaw_rate - cur.yaw_rate, -dw, dw),
         )
         return self.current
 

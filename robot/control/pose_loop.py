@@ -17,8 +17,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numpy as np
-
+from robot.control.clamp import clamp
 from robot.control.odometry import Pose2D
 
 POSITION_GAIN = 1.0  # 1/s
@@ -85,16 +84,16 @@ class PoseLoop:
             k = MAX_POSITION_ERROR_M / distance
             ex, ey = ex * k, ey * k
             ref = Pose2D(estimate.x + ex, estimate.y + ey, ref.yaw)
-        eyaw = float(np.clip(_wrap(ref.yaw - estimate.yaw), -MAX_YAW_ERROR_RAD, MAX_YAW_ERROR_RAD))
+        eyaw = clamp(_wrap(ref.yaw - estimate.yaw), -MAX_YAW_ERROR_RAD, MAX_YAW_ERROR_RAD)
         ref = Pose2D(ref.x, ref.y, _wrap(estimate.yaw + eyaw))
         self.reference = ref
         c, s = math.cos(estimate.yaw), math.sin(estimate.yaw)
         ex_body, ey_body = c * ex + s * ey, -s * ex + c * ey
         lim = self._limits
         return WalkVelocity(
-            float(np.clip(command.vx + POSITION_GAIN * ex_body, -self._backward, lim.vx)),
-            float(np.clip(command.vy + POSITION_GAIN * ey_body, -lim.vy, lim.vy)),
-            float(np.clip(command.yaw_rate + YAW_GAIN * eyaw, -lim.yaw_rate, lim.yaw_rate)),
+            clamp(command.vx + POSITION_GAIN * ex_body, -self._backward, lim.vx),
+            clamp(command.vy + POSITION_GAIN * ey_body, -lim.vy, lim.vy),
+            clamp(command.yaw_rate + YAW_GAIN * eyaw, -lim.yaw_rate, lim.yaw_rate),
         )
 
     def _settled(self, estimate: Pose2D) -> bool:

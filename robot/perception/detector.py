@@ -186,8 +186,15 @@ def _colour_mask(hsv: np.ndarray, hue_ranges: Sequence[tuple[int, int]]) -> np.n
 def _blobs(
     mask: np.ndarray, depth: np.ndarray, intrinsics: PinholeIntrinsics, world_from_camera: np.ndarray
 ) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Pixel index arrays (rows, cols) of each object candidate: connected blobs, fragments merged in 3D."""
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    """Pixel index arrays (rows, cols) of each object candidate: connected blobs, fragments merged in 3D.
+    Labelling runs on the box around the colour's pixels only: over a whole frame it cost ~2 ms per colour even
+    with nothing there, the sensor process's largest single cost."""
+    left, top, box_w, box_h = cv2.boundingRect(mask)
+    if box_w * box_h < MIN_BLOB_PIXELS:
+        return []
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(
+        mask[top : top + box_h, left : left + box_w], connectivity=8
+    )
     fragments: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
     for label in range(1, count):
         if stats[label, cv2.CC_STAT_AREA] < MIN_BLOB_PIXELS:
@@ -195,7 +202,7 @@ def _blobs(
         x, y, w, h = stats[label, :4]
         sub = labels[y : y + h, x : x + w] == label
         vs, us = np.nonzero(sub)
-        vs, us = vs + y, us + x
+        vs, us = vs + y + top, us + x + left
         centre = _to_world(
             intrinsics.back_project(us.astype(float), vs.astype(float), depth[vs, us]), world_from_camera
         ).mean(axis=0)

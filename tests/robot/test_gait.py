@@ -12,12 +12,13 @@ from robot.control.gait import (
     COM_HEIGHT_M,
     FEET_SPACING_M,
     MAX_STEP_FORWARD_M,
+    SEGMENT_HORIZON_S,
     SINGLE_SUPPORT_S,
     GaitPlannerCore,
     StepCommand,
     write_placo_model,
 )
-from robot.control.gait_process import InlineGaitPlanner, ProcessGaitPlanner
+from robot.control.gait_process import INLINE_HORIZON_S, InlineGaitPlanner, ProcessGaitPlanner
 from robot.control.walking import WalkingController, WalkPhase
 from robot.control.whole_body import WholeBodyIK
 from robot.model import humanoid_v1
@@ -191,11 +192,33 @@ def test_a_walk_after_a_turning_walk_starts_exactly_like_a_first_walk(model_path
     assert np.allclose(targets(history + restart), targets(restart), atol=1e-4)
 
 
+def test_an_inline_planner_samples_less_ahead_and_walks_exactly_the_same(model_path) -> None:
+    """Headless, a plan is there when due, so the short inline segment must never run out: a start, a turn, a
+    change of speed and a stop give the same joint targets as segments sampled a whole second ahead."""
+    commands = (
+        [StepCommand(dx=0.04)] * 120 + [StepCommand(dx=0.02, dtheta=0.2)] * 80 + [StepCommand(dy=-0.02)] * 60
+    ) + [StepCommand()] * 200
+
+    def targets(horizon_s: float) -> np.ndarray:
+        walk = WalkingController(
+            InlineGaitPlanner(model_path, DT, horizon_s=horizon_s), WholeBodyIK(model_path, DT), DT
+        )
+        out = []
+        for command in commands:
+            walk.set_step_command(command)
+            t = walk.update()
+            out.append(np.zeros(len(humanoid_v1.JOINT_NAMES)) if t is None else t)
+        assert walk.phase == WalkPhase.STANDING
+        return np.array(out)
+
+    assert np.array_equal(targets(INLINE_HORIZON_S), targets(SEGMENT_HORIZON_S))
+
+
 class HeldPlanner:
     """Inline planning whose answers come only when the test lets them through: a busy machine's late planner."""
 
     def __init__(self, model_path: Path) -> None:
-        self._inline = InlineGaitPlanner(model_path, DT)
+        self._inline = InlineGaitPlanner(model_path, DT, horizon_s=SEGMENT_HORIZON_S)  # a process's whole segment
         self.answer = None
         self.held = True
         self.waits = 0  # results the walk blocked for
