@@ -246,22 +246,35 @@ def _fit_circle(xy: np.ndarray, radius: float, viewpoint: np.ndarray) -> tuple[n
     """Centre of a circle of known radius through 2D points seen from `viewpoint` (Gauss-Newton, trimmed)."""
     away = xy.mean(axis=0) - viewpoint
     centre = xy.mean(axis=0) + (math.pi * radius / 4.0) * away / (np.linalg.norm(away) or 1.0)
-    keep = np.ones(len(xy), dtype=bool)
+    kept = xy
     for iteration in range(12):
-        diff = xy[keep] - centre
-        dist = np.linalg.norm(diff, axis=1)
+        diff = kept - centre
+        dist = np.hypot(diff[:, 0], diff[:, 1])
         dist[dist < 1e-9] = 1e-9
-        residual = dist - radius
-        jacobian = -diff / dist[:, None]
-        step, *_ = np.linalg.lstsq(jacobian, -residual, rcond=None)
-        centre = centre + step
+        centre = centre + _gauss_newton_step(-diff / dist[:, None], dist - radius)
         if iteration == 4:  # drop what is not on the side (a handle, a stray pixel), then refine
-            all_residual = np.abs(np.linalg.norm(xy - centre, axis=1) - radius)
+            all_residual = np.abs(np.hypot(xy[:, 0] - centre[0], xy[:, 1] - centre[1]) - radius)
             keep = all_residual < max(0.004, 3.0 * float(np.median(all_residual)))
-            if keep.sum() < 8:
-                keep[:] = True
-    residual = np.linalg.norm(xy[keep] - centre, axis=1) - radius
+            kept = xy[keep] if keep.sum() >= 8 else xy
+    residual = np.hypot(kept[:, 0] - centre[0], kept[:, 1] - centre[1]) - radius
     return centre, float(np.sqrt(np.mean(residual**2)))
+
+
+def _gauss_newton_step(jacobian: np.ndarray, residual: np.ndarray) -> np.ndarray:
+    """The least-squares step `jacobian @ step = -residual`, by its normal equations (2 or 3 unknowns): `lstsq`'s
+    SVD cost ~5x more and ran 10-12 times per fit, per candidate, per frame. Near-degenerate points (all in one
+    spot or on one line) fall back to it."""
+    normal = jacobian.T @ jacobian
+    gradient = -(jacobian.T @ residual)
+    if len(normal) == 2:
+        a, b, c = float(normal[0, 0]), float(normal[0, 1]), float(normal[1, 1])
+        det = a * c - b * b
+        if det > 1e-12 * (a + c) ** 2:
+            return np.array([(c * gradient[0] - b * gradient[1]) / det, (a * gradient[1] - b * gradient[0]) / det])
+    elif abs(np.linalg.det(normal)) > 1e-12 * float(np.trace(normal)) ** 3:
+        return np.linalg.solve(normal, gradient)
+    step, *_ = np.linalg.lstsq(jacobian, -residual, rcond=None)
+    return step
 
 
 def _fit_sphere(points: np.ndarray, radius: float, camera_position: np.ndarray) -> _Fit | None:
@@ -271,8 +284,7 @@ def _fit_sphere(points: np.ndarray, radius: float, camera_position: np.ndarray) 
         diff = points - centre
         dist = np.linalg.norm(diff, axis=1)
         dist[dist < 1e-9] = 1e-9
-        step, *_ = np.linalg.lstsq(-diff / dist[:, None], -(dist - radius), rcond=None)
-        centre = centre + step
+        centre = centre + _gauss_newton_step(-diff / dist[:, None], dist - radius)
     residual = np.linalg.norm(points - centre, axis=1) - radius
     base = centre - np.array([0.0, 0.0, radius])
     spread = float(np.max(np.linalg.norm(points[:, :2] - centre[:2], axis=1)))
