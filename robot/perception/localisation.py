@@ -115,15 +115,18 @@ class ScanMatcher:
         assert field is not None
         u = (origins[:, 0:1] + world[:, 0] - spec.x0) / spec.resolution - 0.5
         v = (origins[:, 1:2] + world[:, 1] - spec.y0) / spec.resolution - 0.5
-        i0, j0 = np.floor(u).astype(np.int64), np.floor(v).astype(np.int64)
+        i0, j0 = np.floor(u), np.floor(v)
         fu, fv = u - i0, v - j0
         inside = (i0 >= 0) & (j0 >= 0) & (i0 < spec.nx - 1) & (j0 < spec.ny - 1)
-        i0, j0 = np.where(inside, i0, 0), np.where(inside, j0, 0)
+        # the four corners by flat index from one array of them: indexing the 2D field with (i, j) pairs cost twice
+        # as much, and this ran 81 candidates x every end point twice a scan (~12 % of a core at 10 scans/s)
+        corner = np.where(inside, i0 * spec.ny + j0, 0.0).astype(np.intp)
+        flat = field.reshape(-1)
         value = (
-            field[i0, j0] * (1 - fu) * (1 - fv)
-            + field[i0 + 1, j0] * fu * (1 - fv)
-            + field[i0, j0 + 1] * (1 - fu) * fv
-            + field[i0 + 1, j0 + 1] * fu * fv
+            flat.take(corner) * (1 - fu) * (1 - fv)
+            + flat.take(corner + spec.ny) * fu * (1 - fv)
+            + flat.take(corner + 1) * (1 - fu) * fv
+            + flat.take(corner + (spec.ny + 1)) * fu * fv
         )
         return np.sum(np.where(inside, value, 0.0), axis=1)
 
