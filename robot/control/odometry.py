@@ -50,6 +50,8 @@ class LegOdometry:
         with native_stdout_silenced():
             self._robot = placo.RobotWrapper(str(model_path), placo.Flags.mjcf)
         self._names = humanoid_v1.JOINT_NAMES
+        # where each joint sits in placo's configuration vector: the legs' angles go in with one assignment
+        self._joint_offsets = np.array([self._robot.get_joint_offset(name) for name in self._names])
         self._stance: str | None = None
         self._anchor = np.zeros(3)  # world position of the stance foot
         self.position = np.zeros(3)  # trunk (model root) in the world
@@ -106,8 +108,11 @@ class LegOdometry:
     def _feet_in_trunk(self, joint_positions: np.ndarray) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
         """Sole positions and orientations in the trunk frame, from the measured joint angles."""
         robot = self._robot
-        for name, q in zip(self._names, joint_positions, strict=True):
-            robot.set_joint(name, float(q))
+        if len(joint_positions) != len(self._joint_offsets):
+            raise ValueError(f"{len(joint_positions)} joint positions for {len(self._joint_offsets)} joints")
+        q = robot.state.q
+        q[self._joint_offsets] = joint_positions
+        robot.state.q = q
         robot.set_T_world_fbase(np.eye(4))
         robot.update_kinematics()
         frames = {side: robot.get_T_world_frame(humanoid_v1.FOOT_FRAMES[side]) for side in _FEET}

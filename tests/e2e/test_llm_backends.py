@@ -130,11 +130,13 @@ def context(layout) -> PlanningContext:
     return PlanningContext(WorldContext.from_layout(layout))
 
 
-COMMANDS = ("pick up the red mug from the kitchen counter", "go to the charging dock", "find the green apple")
+# One command per test: each reply costs seconds of both cores, and what these tests check (the protocol, the schema,
+# the safety net) is the same for every command. How often the model plans right is `humanoid bench planner`'s.
+COMMANDS = ("pick up the red mug from the kitchen counter", "go to the charging dock")
 
 
-@pytest.mark.parametrize("text", COMMANDS)
-def test_the_servers_replies_follow_the_worlds_plan_schema(server: str, context, text: str) -> None:
+def test_the_servers_replies_follow_the_worlds_plan_schema(server: str, context) -> None:
+    text = COMMANDS[0]
     chat = OpenAIChat(server, "gemma-3-270m", timeout_s=REPLY_TIMEOUT_S)
     schema = world_plan_schema(context.world, max_steps=8)
     plan = parse_plan_text(chat.chat(prompt.messages(text, context), schema))
@@ -164,14 +166,13 @@ def test_the_openai_backend_always_ends_with_a_valid_plan_or_a_reason(server: st
             backend="openai", openai_base_url=server, openai_model="gemma-3-270m", openai_timeout_s=REPLY_TIMEOUT_S
         )
     )
-    for text in COMMANDS:
-        result = pipeline.plan(text, context)
-        assert result.backend == "openai" and result.attempts >= 1
-        assert pipeline.primary.last_attempts[0].answer, "the model was asked, and answered"
-        if result.planner == "rules":  # the model's plan failed validation twice: the reasons are kept
-            assert result.notes[0].startswith("openai: openai gave no valid plan in 2 tries"), result.notes
-        else:
-            assert result.planner == "openai" and all(step.action in ACTIONS for step in result.plan.steps)
+    result = pipeline.plan(COMMANDS[1], context)
+    assert result.backend == "openai" and result.attempts >= 1
+    assert pipeline.primary.last_attempts[0].answer, "the model was asked, and answered"
+    if result.planner == "rules":  # the model's plan failed validation twice: the reasons are kept
+        assert result.notes[0].startswith("openai: openai gave no valid plan in 2 tries"), result.notes
+    else:
+        assert result.planner == "openai" and all(step.action in ACTIONS for step in result.plan.steps)
 
 
 def test_an_impossible_command_fails_with_both_reasons(server: str, context) -> None:
