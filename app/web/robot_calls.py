@@ -6,8 +6,10 @@ e-stop pressed then waited up to 90 s, and `/api/health` with it)."""
 from __future__ import annotations
 
 import asyncio
+import time
+from collections.abc import Callable
 
-from robot.interface import Command, CommandReply, Refusal, RobotPort
+from robot.interface import Command, CommandReply, Refusal, RobotPort, RobotState
 
 # What the robot answers at once (e-stop, teleop, posture, ...): longer than this means it is not answering.
 IMMEDIATE_TIMEOUT_S = 5.0
@@ -21,6 +23,17 @@ async def ask(port: RobotPort, command: Command, timeout_s: float = IMMEDIATE_TI
         return await asyncio.wait_for(asyncio.wrap_future(port.submit_async(command)), timeout_s)
     except TimeoutError:
         return CommandReply(False, f"the robot did not answer within {timeout_s:.0f} s", Refusal.UNAVAILABLE)
+
+
+async def shown(port: RobotPort, predicate: Callable[[RobotState], bool], timeout_s: float = 1.0) -> bool:
+    """Wait (without blocking the loop) until the robot's state shows what a command changed, so that a client
+    reading the state after the reply sees its own change; False when it did not within `timeout_s`."""
+    deadline = time.monotonic() + timeout_s
+    while not predicate(port.state()):
+        if time.monotonic() > deadline:
+            return False
+        await asyncio.sleep(0.005)
+    return True
 
 
 def tell(port: RobotPort, command: Command) -> None:

@@ -238,8 +238,9 @@ def _wait_plan(client, predicate, timeout_s: float = 30.0) -> dict:
 
 def test_plans_can_wait_for_approval_be_approved_paused_and_resumed(client) -> None:
     assert client.put("/api/plan/approval", json={"required": True}).status_code == 200
-    # (the robot's state says so from its next tick on)
-    wait_until(lambda: client.get("/api/config").json()["approval_required"] is True)
+    # answered once the robot's state says so: what is read next shows the change
+    assert client.get("/api/config").json()["approval_required"] is True
+    assert client.get("/api/state").json()["approval_required"] is True
     queued = client.post("/api/commands", json={"text": "say hello"}).json()
     assert "awaits approval" in queued["message"]
     plan_id = _wait_plan(client, lambda p: p["state"] == "awaiting_approval")["plan_id"]
@@ -247,7 +248,8 @@ def test_plans_can_wait_for_approval_be_approved_paused_and_resumed(client) -> N
     assert client.post("/api/plan/approve", json={"plan_id": plan_id}).status_code == 200
     assert client.post("/api/plan/approve").status_code == 409
     _wait_plan(client, lambda p: p["state"] == "succeeded")
-    client.put("/api/plan/approval", json={"required": False})
+    assert client.put("/api/plan/approval", json={"required": False}).status_code == 200
+    assert client.get("/api/config").json()["approval_required"] is False
     assert client.post("/api/plan/resume").status_code == 409
     assert client.post("/api/commands", json={"plan": [{"action": "wait", "seconds": 3}]}).status_code == 202
     _wait_plan(client, lambda p: p["steps"][0]["state"] == "running" and p["steps"][0]["action"] == "wait")

@@ -13,7 +13,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from app.diagnostics import robot_health
 from app.runtime import Runtime
 from app.web.api.deps import Operator, raise_if_refused, runtime
-from app.web.robot_calls import IMMEDIATE_TIMEOUT_S, PLANNING_TIMEOUT_S, ask
+from app.web.robot_calls import IMMEDIATE_TIMEOUT_S, PLANNING_TIMEOUT_S, ask, shown
 from app.web.serialize import event_json, reply_json, state_json
 from robot.interface import (
     ApprovePlan,
@@ -227,8 +227,12 @@ async def resume_plan(rt: RuntimeDep) -> dict[str, Any]:
 
 @router.put("/plan/approval", dependencies=[Operator])
 async def set_approval(body: ApprovalIn, rt: RuntimeDep) -> dict[str, Any]:
-    """Whether plans (automatic replans too) wait for the operator's approval before they run."""
-    return reply_json(await ask(rt.worker, SetApproval(body.required)))
+    """Whether plans (automatic replans too) wait for the operator's approval before they run. Answered once the
+    robot's state says so: a page or script that reads the state next sees its change."""
+    reply = await ask(rt.worker, SetApproval(body.required))
+    if reply.accepted:
+        await shown(rt.worker, lambda state: state.approval_required == body.required)
+    return reply_json(reply)
 
 
 @router.post("/estop")
