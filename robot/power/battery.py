@@ -4,6 +4,8 @@ work the robot does, as the real pack's would, and operators see (and replay) wh
 
 from __future__ import annotations
 
+import bisect
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -11,6 +13,16 @@ import numpy as np
 # Open-circuit voltage of one LiPo cell against its state of charge (typical discharge curve at rest).
 _CELL_SOC = np.array([0.0, 0.05, 0.10, 0.20, 0.30, 0.40, 0.50, 0.60, 0.70, 0.80, 0.90, 1.00])
 _CELL_OCV = np.array([3.27, 3.61, 3.69, 3.73, 3.77, 3.79, 3.82, 3.87, 3.92, 3.98, 4.06, 4.20])
+_SOC_POINTS = tuple(float(v) for v in _CELL_SOC)  # for a scalar, every control tick: plain floats beat np.interp
+_OCV_POINTS = tuple(float(v) for v in _CELL_OCV)
+
+
+def cell_ocv(soc: float) -> float:
+    """One cell's open-circuit voltage at `soc` (clamped to 0..1), interpolated on the discharge curve."""
+    soc = min(max(soc, 0.0), 1.0)
+    j = min(bisect.bisect_right(_SOC_POINTS, soc), len(_SOC_POINTS) - 1) - 1
+    x0, x1, y0, y1 = _SOC_POINTS[j], _SOC_POINTS[j + 1], _OCV_POINTS[j], _OCV_POINTS[j + 1]
+    return y0 + (y1 - y0) * (soc - x0) / (x1 - x0)
 
 
 @dataclass(frozen=True)
@@ -60,7 +72,7 @@ class PackSpec:
         return self.cells * self.cell_resistance_ohm + self.wiring_resistance_ohm
 
     def open_circuit_v(self, soc: float) -> float:
-        return float(self.cells * np.interp(min(max(soc, 0.0), 1.0), _CELL_SOC, _CELL_OCV))
+        return self.cells * cell_ocv(soc)
 
 
 @dataclass(frozen=True)
@@ -91,7 +103,7 @@ class Battery:
         r = self.spec.resistance_ohm
         # P = V I with V = OCV - I R: the smaller root. Past what the pack can deliver it gives out at OCV / 2.
         disc = ocv * ocv - 4.0 * r * load_w
-        current = (ocv - np.sqrt(disc)) / (2.0 * r) if disc > 0 else ocv / (2.0 * r)
+        current = (ocv - math.sqrt(disc)) / (2.0 * r) if disc > 0 else ocv / (2.0 * r)
         return BatteryReading(
             voltage_v=float(ocv - current * r), current_a=float(current), soc=self.soc, power_w=float(load_w)
         )
