@@ -47,7 +47,7 @@ def _maintain(db: sessionmaker, settings: Settings, live_session_id: int) -> Non
 
 
 def _open_recorder(db: sessionmaker, worker: RobotPort, settings: Settings) -> SessionRecorder:
-    recorder = SessionRecorder(
+    return SessionRecorder(
         db,
         worker,
         kind="serve",
@@ -58,9 +58,8 @@ def _open_recorder(db: sessionmaker, worker: RobotPort, settings: Settings) -> S
         camera_width=settings.record_camera_width,
         scan_hz=settings.record_scan_hz,
         map_period_s=settings.record_map_period_s,
-        maintenance=lambda: _maintain(db, settings, recorder.session_id),
+        maintenance=lambda session_id: _maintain(db, settings, session_id),
     )
-    return recorder
 
 
 @dataclass

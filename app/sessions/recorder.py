@@ -125,7 +125,7 @@ class SessionRecorder:
         audio_dir: str | None = None,
         camera_hz: float = 1.0,
         camera_width: int = 320,
-        maintenance: Callable[[], object] | None = None,
+        maintenance: Callable[[int], object] | None = None,
         scan_hz: float = 2.0,
         map_period_s: float = 2.0,
     ) -> None:
@@ -138,7 +138,9 @@ class SessionRecorder:
         self._map_period = map_period_s if map_period_s > 0 else None  # the map when it changed, at most this often
         self._last_scan_time: float | None = None
         self._last_map_scans = -1
-        self._maintenance = maintenance  # run once the session is open, then every few minutes
+        # run with this session's id once the session is open, then every few minutes (given the id: it runs on the
+        # recorder's thread, which starts before the constructor returns)
+        self._maintenance = maintenance
         self._pending: queue.Queue[Any] = queue.Queue()
         self._write_lock = threading.Lock()  # one writer at a time: the thread, or a command being recorded
         self._stop = threading.Event()
@@ -273,7 +275,7 @@ class SessionRecorder:
             if self._maintenance is not None and now >= next_maintenance:
                 next_maintenance = now + MAINTENANCE_PERIOD_S
                 try:
-                    self._maintenance()
+                    self._maintenance(self.session_id)
                 except Exception:
                     log.exception("session maintenance failed")
 

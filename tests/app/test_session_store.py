@@ -9,6 +9,7 @@ import json
 import os
 import socket
 import subprocess
+import time
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
 
@@ -17,6 +18,7 @@ import pytest
 from sqlalchemy import func, select
 
 from app.sessions.archive import ArchiveError, export_session_json, import_session, read_archive
+from app.sessions.db import make_engine, make_session_factory, upgrade_to_head
 from app.sessions.maintenance import apply_retention, close_interrupted_sessions, delete_sessions
 from app.sessions.mcap_export import export_session_mcap
 from app.sessions.models import (
@@ -326,3 +328,57 @@ def test_a_session_closed_as_crashed_stays_crashed_when_the_server_closes_it_aga
     with factory() as db:
         row = db.get(SessionRow, recorder.session_id)
         assert row.outcome == "crashed" and "SIGKILL" in row.summary["cause"]
+
+
+def test_a_server_applies_retention_and_closes_crashed_sessions_as_it_starts(settings, make_worker) -> None:
+    """Maintenance runs on the recorder's thread as soon as the live session is open (it once ran before the
+    recorder it was given existed, failed, and waited minutes for its next turn)."""
+    from app.runtime import Runtime
+
+    upgrade_to_head(settings.database_url)
+    engine = make_engine(settings.database_url)
+    factory = make_session_factory(engine)
+    now = datetime.now(UTC)
+    with factory() as db:
+        old = SessionRow(kind="run", seed=0, backend="sim", started_at=now - timedelta(days=40), ended_at=now)
+        an_hour_ago = now - timedelta(hours=1)
+        crashed = SessionRow(kind="serve", seed=0, backend="sim", started_at=an_hour_ago, heartbeat_at=an_hour_ago)
+        db.add_all([old, crashed])
+        db.commit()
+        old_id, crashed_id = old.id, crashed.id
+    runtime = Runtime.start(settings.model_copy(update={"session_retention_days": 30.0}), worker=make_worker())
+    try:
+        deadline = time.monotonic() + 30.0
+        while True:
+            with factory() as db:
+                ids = set(db.scalars(select(SessionRow.id)))
+                interrupted = db.get(SessionRow, crashed_id)
+                ended = interrupted is not None and interrupted.ended_at is not None
+            if old_id not in ids and ended:
+                break
+            assert time.monotonic() < deadline, f"sessions {sorted(ids)}; the crashed one ended: {ended}"
+            time.sleep(0.05)
+        assert runtime.recorder.session_id in ids  # never the live one
+    finally:
+        runtime.stop()
+        engine.dispose()
+
+
+def test_maintenance_is_told_the_live_session_it_must_keep(store, make_worker) -> None:
+    """It runs on the recorder's thread, which starts inside the recorder's constructor: it is handed the live
+    session's id rather than reading it from a recorder the caller may not hold yet."""
+    from app.sessions.recorder import SessionRecorder
+
+    factory, audio_dir = store
+    told: list[int] = []
+    recorder = SessionRecorder(
+        factory, make_worker(realtime=False), kind="serve", seed=0, audio_dir=audio_dir, maintenance=told.append
+    )
+    try:
+        deadline = time.monotonic() + 30.0
+        while not told:
+            assert time.monotonic() < deadline, "maintenance never ran"
+            time.sleep(0.02)
+        assert told[0] == recorder.session_id
+    finally:
+        recorder.close()
