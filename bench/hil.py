@@ -31,7 +31,7 @@ def hil_trial(seed: int, duration_s: float, lockstep: bool = True) -> dict[str, 
     """One random script (the walk bench's, for this seed) through a fresh rig on an open floor."""
     from robot.control.walk_trial import random_script
     from robot.hardware.worker import HardwareWorker
-    from robot.hil.rig import HilRig, rig_config
+    from robot.hil.rig import HilRig, rig_config, rig_thresholds
     from robot.interface import SetTorque, Teleop
     from robot.model.world import open_floor
 
@@ -42,7 +42,13 @@ def hil_trial(seed: int, duration_s: float, lockstep: bool = True) -> dict[str, 
     timeline += [(s.duration_s, (s.velocity.vx, s.velocity.vy, s.velocity.yaw_rate)) for s in script]
     timeline.append((STOP_S, (0.0, 0.0, 0.0)))
     with HilRig(layout, config, lockstep=lockstep) as rig:
-        robot = HardwareWorker(dataclasses.replace(config, port=rig.port_name), layout, deadman_s=0.0, walk=True)
+        robot = HardwareWorker(
+            dataclasses.replace(config, port=rig.port_name),
+            layout,
+            diagnostics=rig_thresholds(lockstep=lockstep),
+            deadman_s=0.0,
+            walk=True,
+        )
         robot.start()
         try:
             robot.submit(SetTorque(True))

@@ -54,15 +54,23 @@ def run_command(
     drives the simulated robot through the hardware-in-the-loop rig (in lockstep), judged by the rig's physics."""
     if backend == "hil":
         from robot.hardware.worker import HardwareWorker
-        from robot.hil.rig import HilRig, rig_config
+        from robot.hil.rig import HilRig, rig_config, rig_thresholds
 
         layout = generate_world(seed)
         with HilRig(layout, rig_config(lockstep=True), lockstep=True) as rig:
-            robot = HardwareWorker(rig.robot_config(), layout, disk_path=settings.data_dir, deadman_s=0.0, walk=True)
+            robot = HardwareWorker(
+                rig.robot_config(),
+                layout,
+                diagnostics=rig_thresholds(settings.diagnostics, lockstep=True),
+                disk_path=settings.data_dir,
+                deadman_s=0.0,
+                walk=True,
+            )
             return _run_on(robot, text, seed, settings, timeout_s, heard, rig)
     worker = RobotWorker(
         generate_world(seed),
         realtime=False,
+        diagnostics=settings.diagnostics,
         control_hz=settings.control_hz,
         planning=settings.planner_config(),
         max_auto_replans=settings.max_auto_replans,

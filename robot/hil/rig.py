@@ -23,6 +23,8 @@ from dataclasses import replace
 from multiprocessing.connection import Connection
 from typing import Any
 
+from robot.diagnostics.thresholds import Thresholds
+from robot.hardware import control_table as ct
 from robot.hardware import fsr
 from robot.hardware.bus_emulator import BusEmulator, EmulatedBus, EmulatedXM430, serve_bus
 from robot.hardware.config import HardwareConfig, default_config
@@ -39,6 +41,12 @@ RIG_REPLY_MARGIN_MS = 10.0
 # In lockstep the physics waits for the robot, so a late reply costs wall time only: the host waits long enough
 # that its own process or the rig's, paused by a busy machine, is not taken for a servo that stopped answering.
 LOCKSTEP_REPLY_MARGIN_MS = 250.0
+# For the same reason, in lockstep the watchdogs that count wall time (a stalled control loop, a sensor that
+# stopped, the servos' bus watchdog) allow what a busy machine takes: a robot process paused for a second stops
+# nothing in the rig's world. (A run with one core kept busy once stopped safely at a 0.5 s pause.) In real time
+# the robot's own limits stand: those runs measure what the real robot would live through.
+LOCKSTEP_STALE_S = 5.0
+LOCKSTEP_BUS_WATCHDOG_MS = 127 * ct.BUS_WATCHDOG_UNIT_MS  # the longest the servos' register holds (2.54 s)
 
 
 def rig_config(base: HardwareConfig | None = None, lockstep: bool = False) -> HardwareConfig:
@@ -47,7 +55,25 @@ def rig_config(base: HardwareConfig | None = None, lockstep: bool = False) -> Ha
     not)."""
     config = base or default_config()
     margin = LOCKSTEP_REPLY_MARGIN_MS if lockstep else RIG_REPLY_MARGIN_MS
-    return replace(config, imu="opencr", feet="fsr", reply_margin_ms=max(config.reply_margin_ms, margin))
+    config = replace(config, imu="opencr", feet="fsr", reply_margin_ms=max(config.reply_margin_ms, margin))
+    if lockstep and config.bus_watchdog_ms:
+        config = replace(config, bus_watchdog_ms=max(config.bus_watchdog_ms, LOCKSTEP_BUS_WATCHDOG_MS))
+    return config
+
+
+def rig_thresholds(base: Thresholds | None = None, lockstep: bool = False) -> Thresholds:
+    """The diagnostics' limits for a robot on the rig: `base`'s (default: the robot's own), with the wall-clock
+    staleness limits of `LOCKSTEP_STALE_S` in lockstep."""
+    limits = base or Thresholds()
+    if not lockstep:
+        return limits
+    return replace(
+        limits,
+        control_stale_s=max(limits.control_stale_s, LOCKSTEP_STALE_S),
+        imu_stale_s=max(limits.imu_stale_s, LOCKSTEP_STALE_S),
+        camera_stale_s=max(limits.camera_stale_s, LOCKSTEP_STALE_S),
+        lidar_stale_s=max(limits.lidar_stale_s, LOCKSTEP_STALE_S),
+    )
 
 
 class HilRig(BusEmulator):

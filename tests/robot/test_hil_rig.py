@@ -15,6 +15,7 @@ import pytest
 
 from robot.hardware.bus import DynamixelBus
 from robot.hardware.bus_sensors import BusSensors
+from robot.hardware.config import default_config
 from robot.hardware.worker import HardwareWorker
 from robot.hil.rig import HilRig, rig_config
 from robot.interface import EStop, Level, SetTorque, Teleop
@@ -117,3 +118,17 @@ def test_the_real_robot_code_walks_through_the_rig_knows_where_it_went_and_stops
         assert np.hypot(*(stopped - truth.base_position[:2])) < 0.15  # it stopped where it was, not walked on
     finally:
         robot.stop()
+
+
+def test_in_lockstep_a_paused_machine_trips_no_wall_clock_watchdog_and_in_real_time_the_robots_own_limits_stand():
+    from robot.diagnostics.thresholds import Thresholds
+    from robot.hil.rig import LOCKSTEP_STALE_S, rig_config, rig_thresholds
+
+    own = Thresholds()
+    assert rig_thresholds(own) == own and rig_config().bus_watchdog_ms == default_config().bus_watchdog_ms
+    paced = rig_thresholds(own, lockstep=True)
+    for limit in ("control_stale_s", "imu_stale_s", "camera_stale_s", "lidar_stale_s"):
+        assert getattr(paced, limit) >= LOCKSTEP_STALE_S > getattr(own, limit)
+    assert paced.servo_temperature_error_c == own.servo_temperature_error_c  # only the clocks' limits change
+    lockstep = rig_config(lockstep=True)
+    assert lockstep.bus_watchdog_ms > 2000  # (a valid configuration: it is checked as it is made)
