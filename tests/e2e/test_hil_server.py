@@ -11,7 +11,7 @@ import pytest
 
 from harness.server import ServerProcess
 from robot.hardware.config import save_config
-from robot.hil.rig import HilRig, rig_config
+from robot.hil.rig import HilRig, rig_config, rig_thresholds
 from robot.model.world import generate_world
 
 pytestmark = pytest.mark.slow
@@ -34,6 +34,10 @@ def test_the_served_real_robot_walks_to_a_place_through_the_rig(tmp_path) -> Non
         robot_toml = tmp_path / "robot.toml"
         save_config(rig.robot_config(), robot_toml)
         env = {"HUMANOID_ROBOT_CONFIG": str(robot_toml), "HUMANOID_DEADMAN_S": "0"}
+        # the rig is in lockstep: the server's robot is given the wall-clock limits a busy machine needs there
+        limits = rig_thresholds(lockstep=True)
+        for name in ("control_stale_s", "imu_stale_s", "camera_stale_s", "lidar_stale_s"):
+            env[f"HUMANOID_DIAGNOSTICS__{name.upper()}"] = str(getattr(limits, name))
         with ServerProcess(
             tmp_path / "server", seed=SEED, extra_env=env, servo_port=rig.port_name, views=False
         ) as server:
