@@ -13,14 +13,14 @@ from __future__ import annotations
 
 import os
 import platform
-import random
 import tempfile
 import time
 from pathlib import Path
 from typing import Any
 
 from bench.cpu_share import CpuShare
-from harness.browser import launch_chromium, wait_for_scene_render
+from harness.browser import launch_chromium
+from harness.estop_presses import open_watching_pages, press_and_release
 from harness.server import ServerProcess
 from harness.stats import percentiles
 
@@ -44,15 +44,7 @@ def headless_rtf(sim_seconds: float = 20.0, seed: int = 0) -> dict[str, float]:
 
 def _press_estop(page: Any, server: ServerProcess, presses: int) -> tuple[list[float], dict[str, Any]]:
     for i in range(presses):
-        page.click("#estop")
-        page.wait_for_function(f"window.humanoid.estopLatencies.length > {i}", polling=5, timeout=10_000)
-        response = server.post("/api/estop/reset")
-        if response.status_code != 200:
-            raise RuntimeError(f"release failed: {response.text}")
-        page.wait_for_function(
-            "window.humanoid.state && !window.humanoid.state.estop_latched", polling=5, timeout=10_000
-        )
-        time.sleep(random.uniform(0.1, 0.4))  # a human's pace, and not phase-locked with the control ticks
+        press_and_release(page, server, i)
     latencies = [float(v) for v in page.evaluate("window.humanoid.estopLatencies")]
     return latencies, _where_the_time_goes(page.evaluate("[window.humanoid.estopParts, window.humanoid.estopWaits]"))
 
@@ -94,12 +86,7 @@ def run_core(presses: int = 100, viewers: int = 2, duration_s: float = 30.0) -> 
     result["headless"] = headless_rtf()
     with tempfile.TemporaryDirectory() as tmp, ServerProcess(Path(tmp)) as server, sync_playwright() as p:
         browser = launch_chromium(p)
-        pages = []
-        for _ in range(max(1, viewers)):
-            page = browser.new_page(viewport={"width": 1400, "height": 900})
-            page.goto(server.url)
-            wait_for_scene_render(page)
-            pages.append(page)
+        pages = open_watching_pages(browser, server.url, viewers)
         operator = pages[0]
 
         before, wall_before = server.get("/api/health"), time.time()

@@ -14,14 +14,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import random
 import tempfile
-import time
 from collections import Counter
 from pathlib import Path
 from typing import Any
 
-from harness.browser import launch_chromium, wait_for_scene_render
+from harness.browser import launch_chromium
+from harness.estop_presses import open_watching_pages, press_and_release
 from harness.server import ServerProcess
 from harness.stats import percentiles
 
@@ -114,22 +113,11 @@ def record(presses: int, trace_path: Path) -> list[float]:
 
     with tempfile.TemporaryDirectory() as tmp, ServerProcess(Path(tmp)) as server, sync_playwright() as p:
         browser = launch_chromium(p)
-        pages = []
-        for _ in range(2):
-            page = browser.new_page(viewport={"width": 1400, "height": 900})
-            page.goto(server.url)
-            wait_for_scene_render(page)
-            pages.append(page)
+        pages = open_watching_pages(browser, server.url)
         operator = pages[0]
         browser.start_tracing(page=operator, path=str(trace_path), categories=CATEGORIES)
         for i in range(presses):
-            operator.click("#estop")
-            operator.wait_for_function(f"window.humanoid.estopLatencies.length > {i}", polling=5, timeout=10_000)
-            server.post("/api/estop/reset")
-            operator.wait_for_function(
-                "window.humanoid.state && !window.humanoid.state.estop_latched", polling=5, timeout=10_000
-            )
-            time.sleep(random.uniform(0.1, 0.4))  # a human's pace, as `humanoid bench core` presses
+            press_and_release(operator, server, i)
         browser.stop_tracing()
         waits = [float(w) for w in operator.evaluate("window.humanoid.estopWaits")]
         browser.close()

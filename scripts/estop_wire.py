@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import random
 import shutil
 import subprocess
 import tempfile
@@ -20,7 +19,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from harness.browser import launch_chromium, wait_for_scene_render
+from harness.browser import launch_chromium
+from harness.estop_presses import open_watching_pages, press_and_release
 from harness.server import ServerProcess
 from harness.stats import percentiles
 
@@ -69,12 +69,7 @@ def measure(presses: int) -> dict[str, Any]:
         raise SystemExit("needs tcpdump (apt-get install tcpdump) and root")
     with tempfile.TemporaryDirectory() as tmp, ServerProcess(Path(tmp)) as server, sync_playwright() as p:
         browser = launch_chromium(p)
-        pages = []
-        for _ in range(2):
-            page = browser.new_page(viewport={"width": 1400, "height": 900})
-            page.goto(server.url)
-            wait_for_scene_render(page)
-            pages.append(page)
+        pages = open_watching_pages(browser, server.url)
         operator = pages[0]
         capture = Path(tmp) / "lo.txt"
         dump = subprocess.Popen(
@@ -85,13 +80,7 @@ def measure(presses: int) -> dict[str, Any]:
         time.sleep(1.0)  # (tcpdump listening)
         latched: dict[float, dict] = {}
         for i in range(presses):
-            operator.click("#estop")
-            operator.wait_for_function(f"window.humanoid.estopLatencies.length > {i}", polling=5, timeout=10_000)
-            server.post("/api/estop/reset")
-            operator.wait_for_function(
-                "window.humanoid.state && !window.humanoid.state.estop_latched", polling=5, timeout=10_000
-            )
-            time.sleep(random.uniform(0.1, 0.4))  # a human's pace, as `humanoid bench core` presses
+            press_and_release(operator, server, i)
             if i % 10 == 9 or i == presses - 1:  # (the server keeps its recent events only)
                 for event in server.get("/api/events"):
                     if event["kind"] == "estop/latched":
