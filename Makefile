@@ -28,7 +28,7 @@ test: setup-test
 	$(BIN)/python scripts/docs_reference.py --check
 	$(BIN)/mkdocs build --strict -q -d site
 	$(BIN)/python scripts/check-aarch64
-	$(BIN)/python -m pytest -q -n 2 --dist loadfile --no-loadscope-reorder
+	$(BIN)/python -m pytest -q -n 2 --dist loadfile --no-loadscope-reorder --durations=30
 
 lint: setup-test
 	$(BIN)/ruff check app robot bench harness tests examples

@@ -370,7 +370,7 @@ class LocomotionState:
     """The walk as the operator sees it: phase, velocities, estimated pose, and what the mirror draws."""
 
     phase: str  # standing | starting | walking | stopping
-    posture: str  # stand | crouch | moving
+    posture: str  # stand | crouch | moving | held (where a stop left a reach: not a stance)
     command: tuple[float, float, float]  # accepted (vx, vy, yaw rate)
     velocity: tuple[float, float, float]  # after acceleration limits
     estimated_pose: tuple[float, float, float]  # leg odometry + IMU heading: x, y, yaw

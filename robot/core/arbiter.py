@@ -23,6 +23,7 @@ from robot.core.measurements import Measurements
 from robot.core.safety import SafetyLatch
 from robot.interface import Level, Posture
 from robot.manipulation.arm_motion import ArmMotion, Move
+from robot.manipulation.stand_up import arm_back_moves, standing_up_with
 
 # How fast the legs go from the walk's last posture to the standing one (rad/s): 0.34 rad in ~0.85 s when carrying.
 WALK_TO_STAND_SPEED_RAD_S = 0.4
@@ -66,7 +67,10 @@ class JointArbiter:
         self._default_stand = stand.copy()
         self._stand = stand.copy()
         self._posture = PostureController(self._stand)
-        self._posture_name = Posture.STAND
+        # None: holding a pose that is none of the postures (where an e-stop found the arm and the body bent for
+        # it, or the body's stop posture): no standing balance until a posture, a plan or a reset moves it
+        self._posture_name: Posture | None = Posture.STAND
+        self._held_reach = False  # that pose is where a reach was stopped: standing up is the arm's to do
         self._targets = self._stand.copy()  # what was commanded last
         self._arm: ArmMotion | None = None
         self._arm_active = False  # the arm motion owns the joints (reaching, grasping, standing up)
@@ -147,6 +151,9 @@ class JointArbiter:
             if self._arm_active and self._arm is not None:  # the arm stops where it is commanded now
                 self._arm.stop()
                 self._posture.hold(self._arm.targets)
+                # not the stance: balancing it as one snapped a body bent over a counter upright, and it fell
+                self._posture_name = None
+                self._held_reach = True
                 self._arm_active = False
                 self._arm_finishing = False
         if self._loco is not None and self._loco.moving:
@@ -154,6 +161,7 @@ class JointArbiter:
             return True, None
         if self._stop_posture is not None:
             goal, speed = self._stop_posture
+            self._posture_name = None  # (the body's stop posture is not the stance to balance)
             self._posture.hold(self._targets)
             self._posture.move_to(goal, speed)
             return False, None
@@ -175,6 +183,7 @@ class JointArbiter:
         """Control thread, on a reset: standing in the default posture; returns it."""
         with self._lock:
             self._posture_name = Posture.STAND
+            self._held_reach = False
             self._arm_active = False
             self._arm_finishing = False
             self._stand = self._default_stand.copy()
@@ -213,25 +222,45 @@ class JointArbiter:
         return self._posture.settled
 
     def posture_label(self) -> str:
-        """The posture for the state: its name once there, "moving" on the way."""
-        return self._posture_name.value if self._posture.settled else "moving"
+        """The posture for the state: its name once there, "moving" on the way, "held" where a stop left it."""
+        if not self._posture.settled:
+            return "moving"
+        return self._posture_name.value if self._posture_name is not None else "held"
 
     def set_posture(self, posture: Posture, goal: np.ndarray, speed_rad_s: float | None = None) -> None:
         with self._lock:
+            if posture == Posture.STAND and self._stand_up_from_reach():
+                return
+            self._held_reach = False
             self._posture_name = posture
             self._posture.move_to(goal, speed_rad_s)
 
     def to_standing(self) -> None:
         """Back to the standing posture unless it is there or on the way (the operator starts to drive)."""
         with self._lock:
-            if self._posture_name != Posture.STAND:
+            if self._posture_name != Posture.STAND and not self._stand_up_from_reach():
                 self._posture_name = Posture.STAND
                 self._posture.move_to(self._stand)
 
     def begin_plan(self) -> None:
         """A new plan starts from the standing posture (a move, so only after an explicit command)."""
         with self._lock:
+            if self._stand_up_from_reach():
+                return  # (the plan's first body step waits for the arm to finish)
+            self._posture_name = Posture.STAND
             self._posture.move_to(self._stand)
+
+    def _stand_up_from_reach(self) -> bool:
+        """From a reach that was stopped (an e-stop, or a pick or place cancelled midway: its arm holds where it
+        was), stand up as a pick does, the arm swinging back as the legs straighten. Straight to the standing
+        posture, joint by joint, the robot fell forward with its arm still out; left to the arm, the next walk got
+        no legs ("stuck: no progress"). False when there is no such reach."""
+        left_reaching = self._arm_active and not self._arm_finishing
+        if not (self._held_reach or left_reaching) or self._latch.fallen:
+            return False
+        self._held_reach = False
+        self.finish_arm_in_background(standing_up_with(arm_back_moves(), self._default_stand))
+        return True
 
     def stand_with_upper_body(self, stand: np.ndarray) -> None:
         """Stand (and walk) with the upper body as in `stand` (carrying): the walk keeps the arms there."""
@@ -239,6 +268,7 @@ class JointArbiter:
             self._loco.walking.ik.set_upper_body(dict(zip(self.joint_names, stand, strict=True)))
         with self._lock:
             self._stand = stand
+            self._posture_name = Posture.STAND
             self._posture.move_to(stand)
 
     # ---------------------------------------------------------------------------------------------------------
@@ -287,6 +317,7 @@ class JointArbiter:
             self._loco.walking.ik.set_upper_body(dict(zip(self.joint_names, stand, strict=True)))
         with self._lock:
             self._stand = stand
+            self._posture_name = Posture.STAND
             self._posture.hold(arm.targets)
             self._posture.move_to(stand)
             self._arm_active = False

@@ -10,9 +10,10 @@ from collections.abc import Callable
 import numpy as np
 
 from robot.control.head import DEFAULT_TILT
-from robot.manipulation.arm_motion import JointMove, Move
+from robot.manipulation.arm_motion import Move
 from robot.manipulation.grasp_plan import Stance, carry_moves, comfortably_in_reach, grasp_stance
 from robot.manipulation.pick import PickFailed
+from robot.manipulation.stand_up import arm_back_moves, standing_up_with
 from robot.model import humanoid_v1
 from robot.model.world import WorldLayout
 from robot.navigation.navigator import NavigationFailed, Navigator
@@ -24,8 +25,6 @@ LOCATE_TIMEOUT_S = 2.0
 STAGING_BACK_M = 0.12
 STANCE_SETTLE_M = 0.02
 STEP_TO_M = 0.6  # nearer than this, the stance is corrected by a straight walk
-STAND_UP_S = 1.5
-SWING_BACK = {"r_sho_pitch": 1.57, "r_sho_roll": 0.0, "r_el": 1.8, "r_wrist": -0.9}
 
 
 class ArmBody:
@@ -147,31 +146,3 @@ class ArmBody:
     def _wait_standing(self) -> None:
         while not self._parts.arm.standing:
             self._ctx.wait_sim(0.02)
-
-
-def _legs_to(targets: np.ndarray, duration_s: float) -> JointMove:
-    names = humanoid_v1.JOINT_NAMES
-    return JointMove({n: float(targets[names.index(n)]) for n in humanoid_v1.LEG_JOINTS}, duration_s, "stand up")
-
-
-def standing_up_with(moves: list[Move], stand: np.ndarray) -> list[Move]:
-    """The legs back to the standing posture while the first (joint) arm move plays: one move, not two in a row
-    (1.2-1.5 s saved each time the robot stands up from a reach)."""
-    first, *rest = moves
-    if not isinstance(first, JointMove):
-        raise TypeError("standing up goes with a joint move: a hand move would have the solver move the legs")
-    legs = _legs_to(stand, STAND_UP_S)
-    both = JointMove(
-        {**legs.positions, **first.positions}, max(STAND_UP_S, first.duration_s), f"stand up, {first.label}"
-    )
-    return [both, *rest]
-
-
-def arm_back_moves() -> list[Move]:
-    """The arm-out moves in reverse, ending in the standing arm posture with the gripper closed."""
-    stand = humanoid_v1.stand_posture()
-    return [
-        JointMove({**SWING_BACK, "r_grip": 0.0}, 1.2, "swing back"),
-        JointMove({"r_el": 0.0, "r_wrist": 0.0, "r_sho_pitch": 0.0}, 0.8, "unfold upright"),
-        JointMove({n: stand[n] for n in ("r_sho_roll", "l_sho_pitch", "l_sho_roll", "l_el")}, 0.8, "arms down"),
-    ]

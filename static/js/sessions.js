@@ -64,7 +64,7 @@ async function loadList() {
     del.className = "danger";
     del.disabled = s.id === liveSessionId;
     del.title = s.id === liveSessionId ? "the session being recorded now cannot be deleted" : "delete this session";
-    del.addEventListener("click", (e) => { e.stopPropagation(); deleteSession(s.id); });
+    del.addEventListener("click", (e) => { e.stopPropagation(); armOrDelete(del, s.id); });
     actions.appendChild(del);
     tr.appendChild(actions);
     tr.addEventListener("click", () => loadDetail(s.id));
@@ -76,8 +76,29 @@ async function loadList() {
   $("page-info").textContent = `page ${Math.floor(offset / PAGE) + 1} of ${pages}`;
 }
 
+// Deleting asks twice, in the page: the first click arms the button, the second deletes; a click anywhere else
+// disarms it. (A native confirm() would stop the page, its replay included, for as long as it waits.)
+function armOrDelete(button, id) {
+  if (button.dataset.armed === "yes") return deleteSession(id);
+  disarmDeletes();
+  button.dataset.armed = "yes";
+  button.textContent = "Delete for good?";
+  button.title = `click again to delete session ${id} and everything recorded in it (its recordings too): ` +
+    "this cannot be undone";
+}
+
+function disarmDeletes() {
+  for (const button of document.querySelectorAll("#sessions button[data-armed='yes']")) {
+    button.dataset.armed = "";
+    button.textContent = "Delete";
+    button.title = "delete this session";
+  }
+}
+document.addEventListener("click", (e) => {
+  if (!(e.target instanceof Element) || !e.target.closest("#sessions button[data-armed='yes']")) disarmDeletes();
+});
+
 async function deleteSession(id) {
-  if (!window.confirm(`Delete session ${id} and everything recorded in it (its recordings too)? This cannot be undone.`)) return;
   const r = await fetch(`/api/sessions/${id}`, { method: "DELETE" });
   if (!r.ok) { showResult("list-result", await errorText(r), false); return; }
   showResult("list-result", `session ${id} deleted`, true);

@@ -12,10 +12,12 @@ from robot.interface import (
     ExecutePlan,
     Mode,
     PlanState,
+    Posture,
     Refusal,
     ReleaseEStop,
     Replan,
     RunCommand,
+    SetPosture,
     StepState,
 )
 
@@ -182,6 +184,62 @@ def test_controlled_stop_holds_the_robot_where_it_stands(make_worker) -> None:
     assert abs(after.tilt_deg - before.tilt_deg) < 0.3  # neither sagging nor tipping
     assert abs(after.base_position[2] - before.base_position[2]) < 0.002
     assert np.max(np.abs(np.array(after.qpos)[7:] - np.array(before.qpos)[7:])) < 0.01
+
+
+def _bent_over_a_reach(worker):
+    """The robot reaching low ahead with its right arm, as a pick does, held there (the arm's moves done); returns
+    the arm's motion."""
+    from robot.manipulation.grasp_plan import GRASP_OFFSET, REACH_SURFACE_Z, arm_out_moves, grasp_moves
+
+    arm = worker.arbiter.take_arm()  # as the pick skill does
+    moves, _ = grasp_moves(np.array([*GRASP_OFFSET, REACH_SURFACE_Z[0]]), object_height=0.1)  # low: a deep bend
+    arm.queue(*arm_out_moves(), *moves)
+    assert arm.done.wait(120.0)
+    return arm
+
+
+def test_an_estop_with_the_body_bent_over_a_reach_holds_it_there_without_a_fall(make_worker) -> None:
+    """A pick cancelled mid-reach leaves the body bent over the counter, the arm out; an e-stop then must hold that
+    pose. It used to hand the joints to the standing balance, which snapped the body upright in one tick: the robot
+    fell (in CI, the e-stop after the browser tests' cancelled pick; reproduced with a pick cancelled 6 s in)."""
+    worker = make_worker(realtime=False)
+    assert worker.wait_for(lambda s: s.sim_time_s >= 1.0, 10.0)
+    standing = worker.state()
+    _bent_over_a_reach(worker)
+    bent = worker.state()
+    assert standing.base_position[2] - bent.base_position[2] > 0.02  # the reach crouched the trunk
+    worker.submit(EStop(source="test"))
+    assert worker.wait_for(lambda s: s.estop_latched and s.sim_time_s >= bent.sim_time_s + 3.0, 30.0)
+    held = worker.state()
+    assert not held.fallen
+    # without the fix the joints moved 1.2 rad and the trunk rose 4 cm: stood up, by the e-stop
+    assert np.max(np.abs(np.array(held.qpos)[7:] - np.array(bent.qpos)[7:])) < 0.03
+    assert abs(held.base_position[2] - bent.base_position[2]) < 0.005
+    assert abs(held.tilt_deg - bent.tilt_deg) < 1.0
+    assert held.locomotion.posture == "held"  # not the stance: nothing balances it back to standing
+    # released, the operator stands it up (as a pick does: joint by joint it fell forward, the arm still out)
+    assert worker.submit(ReleaseEStop(source="test")).accepted
+    assert worker.submit(SetPosture(Posture.STAND)).accepted
+    assert worker.wait_for(lambda s: s.locomotion.posture == "stand" or s.fallen, 60.0)
+    stood = worker.state()
+    assert not stood.fallen
+    assert abs(stood.base_position[2] - standing.base_position[2]) < 0.01
+
+
+def test_after_a_reach_cancelled_midway_the_next_plan_stands_the_robot_up_first(make_worker) -> None:
+    """A cancelled pick leaves its arm holding where it was; the next plan stood in that reach and its walk got no
+    legs ("stuck: no progress for 20 s"). Now the plan starts by standing up as a pick does."""
+    worker = make_worker(realtime=False)
+    assert worker.wait_for(lambda s: s.sim_time_s >= 1.0, 10.0)
+    standing = worker.state()
+    _bent_over_a_reach(worker).stop()  # as the skill does when its step is cancelled
+    reply = worker.submit(RunCommand("wait 1 second"))  # (the body's actions need perception, off here)
+    assert reply.accepted, reply
+    assert worker.wait_for(plan_done(reply.command_id), 120.0)
+    assert worker.wait_for(lambda s: s.locomotion.posture == "stand" or s.fallen, 60.0)  # the legs: walking's again
+    after = worker.state()
+    assert not after.fallen
+    assert abs(after.base_position[2] - standing.base_position[2]) < 0.01
 
 
 def test_a_fall_is_detected_reported_and_stops_motion(layout, scene_model) -> None:
