@@ -77,6 +77,9 @@ class RobotArm:
     def hold_object(self, name: str | None) -> None:
         self._held = name
 
+    def grasping(self) -> bool:
+        return self._arbiter.grasping()
+
     def motion(self) -> ArmMotion:
         return self._arbiter.arm_motion()
 

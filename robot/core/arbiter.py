@@ -23,7 +23,8 @@ from robot.core.measurements import Measurements
 from robot.core.safety import SafetyLatch
 from robot.interface import Level, Posture
 from robot.manipulation.arm_motion import ArmMotion, Move
-from robot.manipulation.stand_up import arm_back_moves, standing_up_with
+from robot.manipulation.grasp_plan import carry_moves, grasping
+from robot.manipulation.stand_up import arm_back_moves, letting_go_out_in_front, standing_up_with
 
 # How fast the legs go from the walk's last posture to the standing one (rad/s): 0.34 rad in ~0.85 s when carrying.
 WALK_TO_STAND_SPEED_RAD_S = 0.4
@@ -77,6 +78,9 @@ class JointArbiter:
         # The arm finishes its queued moves on its own (stowing after a place), then the control thread hands the
         # joints back: the robot's next body step waits for that.
         self._arm_finishing = False
+        self._finish_keeps_upper_body = False  # the arm finishes carrying: walk with the upper body as it ends
+        self._grip = self.joint_names.index("r_grip") if "r_grip" in self.joint_names else None
+        self._measured: np.ndarray | None = None  # the joints as last measured
 
     # ---------------------------------------------------------------------------------------------------------
     # the control thread
@@ -84,6 +88,7 @@ class JointArbiter:
     def targets(self, measured: Measurements) -> np.ndarray:
         """This tick's joint targets (the head's included)."""
         fallen = self._latch.fallen
+        self._measured = measured.joint_positions
         targets = self._owner_targets(measured, fallen)
         if not fallen and self.head is not None:  # the head is the camera's gimbal, whoever drives the other joints
             pan, tilt = self.head.update(self.dt)
@@ -110,7 +115,7 @@ class JointArbiter:
             with self._lock:
                 finished = self._arm_finishing and arm.done.is_set() and self._arm_active
             if finished:
-                self.release_arm(None)
+                self.release_arm(arm.targets if self._finish_keeps_upper_body else None)
                 with self._lock:
                     self._arm_finishing = False
             return targets
@@ -254,13 +259,28 @@ class JointArbiter:
         """From a reach that was stopped (an e-stop, or a pick or place cancelled midway: its arm holds where it
         was), stand up as a pick does, the arm swinging back as the legs straighten. Straight to the standing
         posture, joint by joint, the robot fell forward with its arm still out; left to the arm, the next walk got
-        no legs ("stuck: no progress"). False when there is no such reach."""
+        no legs ("stuck: no progress"). With something in the hand it stands up carrying it, as after a pick (swung
+        back, a mug went flying). False when there is no such reach."""
         left_reaching = self._arm_active and not self._arm_finishing
         if not (self._held_reach or left_reaching) or self._latch.fallen:
             return False
         self._held_reach = False
-        self.finish_arm_in_background(standing_up_with(arm_back_moves(), self._default_stand))
+        holding = self.grasping()
+        if holding:
+            moves = standing_up_with(carry_moves(), self._default_stand)
+        else:
+            hand = self.arm_motion().placed_hand()
+            let_go = letting_go_out_in_front(hand) if hand is not None else []
+            moves = [*let_go, *standing_up_with(arm_back_moves(), self._default_stand)]
+        self.finish_arm_in_background(moves, keep_upper_body=holding)
         return True
+
+    def grasping(self) -> bool:
+        """Whether the right hand holds something, by its fingers (held apart while commanded tighter)."""
+        measured = self._measured
+        if measured is None or self._grip is None:
+            return False
+        return grasping(float(self._targets[self._grip]), float(measured[self._grip]))
 
     def stand_with_upper_body(self, stand: np.ndarray) -> None:
         """Stand (and walk) with the upper body as in `stand` (carrying): the walk keeps the arms there."""
@@ -298,12 +318,14 @@ class JointArbiter:
                 self._arm_active = True
         return arm
 
-    def finish_arm_in_background(self, moves: list[Move]) -> None:
-        """Play `moves` on the arm without waiting, then stand with the arms in the default posture."""
+    def finish_arm_in_background(self, moves: list[Move], keep_upper_body: bool = False) -> None:
+        """Play `moves` on the arm without waiting, then stand with the arms in the default posture, or with the
+        upper body as the moves end (`keep_upper_body`: carrying)."""
         arm = self.take_arm()
         with self._lock:
             arm.queue(*moves)
             self._arm_finishing = True
+            self._finish_keeps_upper_body = keep_upper_body
 
     def release_arm(self, upper_body: np.ndarray | None) -> None:
         """Hand the joints back to the posture controller and walking: with the upper body held as in

@@ -62,6 +62,7 @@ class ArmMotion:
         self._current: Move | None = None
         self._elapsed = 0.0
         self._ik_live = False  # the IK's state matches the commanded targets
+        self._hand_placed = False  # the last move was a hand move: the hand is where it sent it
         self._side = "right"
         # hand-space state (feet frame)
         self._from = np.zeros(3)
@@ -84,6 +85,7 @@ class ArmMotion:
             self._current = None
             self._targets = np.asarray(joints, dtype=float).copy()
             self._ik_live = False
+            self._hand_placed = False
         self._done.set()
 
     def queue(self, *moves: Move) -> None:
@@ -115,6 +117,12 @@ class ArmMotion:
     def commanded_hand(self) -> np.ndarray:
         with self._lock:
             return self._target.copy()
+
+    def placed_hand(self) -> np.ndarray | None:
+        """Where the last hand move sent the hand (feet frame), or None when a joint move came after it (or no hand
+        move yet): whether the hand may be out at some object, without asking the solver from another thread."""
+        with self._lock:
+            return self._target.copy() if self._hand_placed else None
 
     def measured_hand(self, joints: np.ndarray) -> np.ndarray:
         return self._ik.hand_position(joints, self._side)
@@ -168,6 +176,7 @@ class ArmMotion:
         """Start `move` from where the last one left the joints (lock held)."""
         self._current = move
         self._elapsed = 0.0
+        self._hand_placed = isinstance(move, HandMove)
         if isinstance(move, JointMove):
             self._joint_from = self._targets.copy()
             self._ik_live = False

@@ -156,6 +156,17 @@ CARRY_ARM = {"r_sho_pitch": 1.5, "r_sho_roll": -0.5, "r_el": 2.0, "r_wrist": -1.
 CARRY_HAND_AHEAD_M = 0.25
 
 
+# A hand holds something when its fingers stand open by more than an empty grip while commanded this much tighter
+# (a position servo closing on an object stalls on it; in free air the fingers reach their target).
+GRIP_SQUEEZE_M = 0.003
+
+
+def grasping(commanded_grip_m: float, measured_grip_m: float) -> bool:
+    """Whether the hand holds something, by its fingers: how a stopped pick or place knows whether it still has the
+    object (before the lift, after the release or anywhere between)."""
+    return measured_grip_m >= EMPTY_GRIP_M and commanded_grip_m < measured_grip_m - GRIP_SQUEEZE_M
+
+
 def carry_moves() -> list[Move]:
     """From holding the object up where it was grasped to carrying it close to the body (less to sway when
     walking, nothing sticking out to sweep into furniture when turning); the left arm goes back down."""

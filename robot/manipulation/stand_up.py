@@ -6,9 +6,11 @@ from __future__ import annotations
 import numpy as np
 
 from robot.manipulation.arm_motion import JointMove, Move
+from robot.manipulation.grasp_plan import release_moves
 from robot.model import humanoid_v1
 
 STAND_UP_S = 1.5
+REACHING_AHEAD_M = 0.15  # a hand this far ahead of the feet is reaching for something on a surface
 SWING_BACK = {"r_sho_pitch": 1.57, "r_sho_roll": 0.0, "r_el": 1.8, "r_wrist": -0.9}
 
 
@@ -38,3 +40,12 @@ def arm_back_moves() -> list[Move]:
         JointMove({"r_el": 0.0, "r_wrist": 0.0, "r_sho_pitch": 0.0}, 0.8, "unfold upright"),
         JointMove({n: stand[n] for n in ("r_sho_roll", "l_sho_pitch", "l_sho_roll", "l_el")}, 0.8, "arms down"),
     ]
+
+
+def letting_go_out_in_front(hand_in_feet: np.ndarray) -> list[Move]:
+    """Open, back away and rise clear before swinging back, when the hand is out in front reaching and holds
+    nothing: it may be round an object it let go of or had not closed on yet (a pick or place stopped midway).
+    Swung back from there, the arm knocked the mug over, or closed on it and swung it down to the hip. Nothing when
+    the hand is not out in front."""
+    hand = np.asarray(hand_in_feet, dtype=float)
+    return release_moves(hand) if hand[0] >= REACHING_AHEAD_M else []

@@ -90,6 +90,9 @@ class Arm(Protocol):
 
     def hold_object(self, name: str | None) -> None: ...
 
+    def grasping(self) -> bool:
+        """The fingers hold something (whatever the bookkeeping says): a stopped pick or place asks."""
+
     def motion(self) -> ArmMotion: ...
 
     def take(self) -> ArmMotion:

@@ -64,8 +64,12 @@ class ManipulateSkill:
             raise StepFailed(f"already holding the {held}: place it first")
         try:
             report = pick(name, obj.height, self.arm_body(ctx))
-        except PickFailed as exc:
-            raise StepFailed(str(exc)) from exc
+        except BaseException as exc:  # failed, cancelled or stopped midway: the fingers may have closed on it yet
+            if self._parts.arm.grasping():
+                self._parts.arm.hold_object(name)
+            if isinstance(exc, PickFailed):
+                raise StepFailed(str(exc)) from exc
+            raise
         finally:
             self._walk_ended()
         self._parts.arm.hold_object(name)
@@ -100,8 +104,12 @@ class ManipulateSkill:
             raise StepFailed(f"unreachable: no free spot on the {place.name} in front of the robot")
         try:
             report = place_held(held, obj.height, spot, place.approach[2], self.arm_body(ctx))
-        except (PlaceFailed, PickFailed) as exc:
-            raise StepFailed(str(exc)) from exc
+        except BaseException as exc:  # failed, cancelled or stopped midway: the hand may have let go of it already
+            if not self._parts.arm.grasping():
+                self._parts.arm.hold_object(None)
+            if isinstance(exc, (PlaceFailed, PickFailed)):
+                raise StepFailed(str(exc)) from exc
+            raise
         finally:
             self._walk_ended()
         self._parts.arm.hold_object(None)
