@@ -341,7 +341,7 @@ MISHEARD_SHOWN = 40  # per set
 
 
 def run_speech(
-    sets: tuple[str, ...] = ("dev", "heldout"),
+    sets: tuple[str, ...] = ("dev", "heldout", "heldout2"),
     engines: tuple[str, ...] = ("whisper", "pocketsphinx"),
     robot_microphone: bool = True,
     quick: bool = False,

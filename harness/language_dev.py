@@ -94,6 +94,10 @@ DEV: tuple[LanguageCase, ...] = (
     ),
     _e("sequence", "go to the kitchen and get the apple", fetch(APPLE)),
     _e("sequence", "bring the bottle to the table and then go home", seq(carry(BOTTLE, TABLE), HOME)),
+    # where the walk ends, said after it (added at stop 57)
+    _e("sequence", "walk to the dock and stop right beside it", go(DOCK)),
+    _e("sequence", "go over to the table and stop once you get there", go(TABLE)),
+    _e("sequence", "walk over to the counter and stop when you get close", go(COUNTER)),
     # a pronoun across two steps
     _e("pronoun", "grab the cup and put it on the dock", carry(MUG, DOCK)),
     _e("pronoun", "pick up the bottle then bring it here", fetch(BOTTLE)),
@@ -114,6 +118,13 @@ DEV: tuple[LanguageCase, ...] = (
     # the object first
     _e("object first", "the apple, put it on the table", carry(APPLE, TABLE)),
     _e("object first", "the water bottle - can you bring it to me", fetch(BOTTLE)),
+    # the object named after the request, for something vague or "it" (added at stop 57)
+    _e("object first", "fetch me something to eat, the green apple", fetch(APPLE)),
+    _e("object first", "could you grab it for me, the blue bottle", fetch(BOTTLE)),
+    _e("object first", "get me something to drink the red mug", fetch(MUG)),  # (the comma not heard)
+    _e("polite", "will you be so kind as to get the apple", fetch(APPLE)),
+    _e("polite", "or, would you be so kind to bring me the mug", fetch(MUG)),  # ("uh" heard as "or")
+    _e("polite", "keep an eye out for the water bottle", find(BOTTLE)),
     _e("object first", "that red cup, pick it up", fetch(MUG)),
     _e("object first", "the mug on the counter: take it to the dock", carry(MUG, DOCK)),
     _e("object first", "the green apple, where is it?", find(APPLE)),

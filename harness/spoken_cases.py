@@ -24,7 +24,6 @@ from harness.planner_cases import (
     HOME,
     LOOK_AND_TELL,
     MUG,
-    STOP,
     TABLE,
     Case,
     Seed,
@@ -181,9 +180,73 @@ HELDOUT = SpokenSet(
     with_stop=(
         Case("drive to the counter and stop next to it", go(COUNTER)),
         Case("stop at the counter and pick up the apple", fetch(APPLE)),
-        Case("bring the mug to the table and then stop moving", seq(carry(MUG, TABLE), STOP)),
+        # (relabelled at stop 57: was the carry then a "stop" step; the planner reads a stop after the last motion
+        # as where that motion ends, and a plan has the robot standing still at its end anyway)
+        Case("bring the mug to the table and then stop moving", carry(MUG, TABLE)),
         Case("go to the charging dock and stop when you get there", go(DOCK)),
     ),
 )
 
-SETS: dict[str, SpokenSet] = {s.name: s for s in (DEV, HELDOUT)}
+# Written on 2026-11-28 (stop 57) before the planner and the recogniser's hints were changed with `HELDOUT`'s
+# failures in view: from then on `HELDOUT` is one more set tuned on, and this one is only measured.
+HELDOUT2 = SpokenSet(
+    name="heldout2",
+    voices=(
+        Voice("en-gb-x-gbcwmd+m1", 160),
+        Voice("en-us+m7", 145, 35),
+        Voice("en-gb-x-rp+f4", 185, 60),
+        Voice("en-029+f3", 150, 55),
+    ),
+    commands=(
+        Case("hi robot, can you get me the apple", fetch(APPLE)),
+        Case("I'd love a drink, grab the water bottle please", fetch(BOTTLE)),
+        Case("please go over to the kitchen counter", go(COUNTER)),
+        Case("could you bring the red mug over to the dock", carry(MUG, DOCK)),
+        Case("take the bottle to the kitchen", carry(BOTTLE, COUNTER)),
+        Case("find the red cup", find(MUG)),
+        Case("look around and tell me what's there", LOOK_AND_TELL),
+        Case("where's the apple", find(APPLE)),
+        Case("go to your charging station", go(DOCK)),
+        Case("move the apple onto the living room table", carry(APPLE, TABLE)),
+        Case("pick up the mug, then take it to the dock", carry(MUG, DOCK)),
+        Case("go to the counter and then to the table", seq(go(COUNTER), go(TABLE))),
+        Case("first look around, then go home", seq(LOOK_AND_TELL, HOME)),
+        Case("place it on the kitchen counter", carry(MUG, COUNTER, held=True), held=MUG),
+        Case("bring that to me", fetch(BOTTLE), history=(("find the water bottle", find(BOTTLE)),)),
+        Case("the water bottle, put it on the table please", carry(BOTTLE, TABLE)),
+        Case("announce that dinner is ready", say("dinner is ready")),
+        Case("tell everyone hello", say("hello")),
+        Case("hold on for ten seconds", wait("10")),
+        Case("just wait two seconds", wait("2")),
+        Case("go back to your starting point", HOME),
+        Case("come back home please", HOME),
+        Case("walk over to the living room", go(TABLE)),
+        Case("can you fetch me the green apple from the counter", fetch(APPLE)),
+        Case("would you kindly put the mug on the living room table", carry(MUG, TABLE)),
+        Case("search the room for the apple", find(APPLE)),
+        Case("have a look around and describe it", LOOK_AND_TELL),
+        Case("okay now head over to the dock", go(DOCK)),
+    ),
+    stops=(
+        "stop right now please",
+        "please halt",
+        "robot freeze",
+        "okay robot, stop",
+        "emergency stop, now",
+        "hey stop",
+        "halt",
+        "freeze now please",
+        "stop stop",
+        "robot stop please",
+        "please freeze",
+        "emergency stop right now",
+    ),
+    with_stop=(
+        Case("go to the table and stop in front of it", go(TABLE)),
+        Case("walk to the counter, then stop", go(COUNTER)),  # (as in HELDOUT: the stop is where the walk ends)
+        Case("fetch the apple and don't stop for anything", fetch(APPLE)),
+        Case("head to the charger and stop beside it", go(DOCK)),
+    ),
+)
+
+SETS: dict[str, SpokenSet] = {s.name: s for s in (DEV, HELDOUT, HELDOUT2)}

@@ -565,7 +565,9 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument(
         "--no-fallback", action="store_true", help="planner, language: judge an LLM backend alone (no rules fallback)"
     )
-    bench.add_argument("--sets", default="dev,heldout", help="speech: spoken sets (dev, heldout), comma-separated")
+    bench.add_argument(
+        "--sets", default="dev,heldout,heldout2", help="speech: spoken sets (dev, heldout, heldout2), comma-separated"
+    )
     bench.add_argument(
         "--engines", default="whisper,pocketsphinx", help="speech: recognisers (whisper, pocketsphinx), comma-separated"
     )

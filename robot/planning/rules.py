@@ -13,7 +13,7 @@ make it ask one question (`ClarificationNeeded`), never guess.
 from __future__ import annotations
 
 import re
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, replace
 
 from robot.interface import Plan, Step
@@ -40,7 +40,7 @@ class RulesPlanner:
         return "built-in rules (offline)"
 
     def plan(self, text: str, context: PlanningContext) -> Plan:
-        raw = text.strip()
+        raw = _LEADING_OR.sub("", text.strip())
         if not raw:
             raise PlanningError("empty command")
         answer = self._answer(raw, context)
@@ -142,6 +142,10 @@ def _read(raw: str) -> list[Request]:
     return requests
 
 
+# "Or bring me the bottle": a recogniser hears the "uh" or "er" a command starts with as "or" (only there: "go to
+# the dock or the table" is no sequence)
+_LEADING_OR = re.compile(r"^or\b[\s,.]*", re.IGNORECASE)
+
 # a garbled polite frame before a request ("cut your please" for "could you please") is at most this long and
 # ends in one of its words; a word that changes or adds to the request means it is not a frame
 MAX_GARBLED_FRAME_WORDS = 4
@@ -179,7 +183,7 @@ class _Composer:
         self.last_place: str | None = None
 
     def compose(self, requests: list[Request]) -> Plan:
-        requests = [r for r in requests if r.action not in ("nothing", "chatter")]
+        requests = self._named_after([r for r in requests if r.action not in ("nothing", "chatter")])
         if len(requests) == 1 and requests[0].action == "topic" and self._names_an_object(requests[0].thing):
             requests = [Request("fetch", thing=requests[0].thing, to_me=True)]  # "the red mug, please"
         parts: list[_Said] = []
@@ -203,6 +207,35 @@ class _Composer:
         if not steps:
             raise PlanningError(f"I don't understand {self.raw!r}. {self.abilities}")
         return Plan(tuple(steps))
+
+    def _named_after(self, requests: list[Request]) -> list[Request]:
+        """ "bring me something to drink, the bottle", "get it, the red mug": an object named on its own right after
+        a request whose thing names no one object is that thing."""
+        named: list[Request] = []
+        for request in requests:
+            previous = named[-1] if named else None
+            if (
+                request.action == "topic"
+                and previous is not None
+                and previous.action in ("fetch", "carry", "find")
+                and self._one_object(previous.thing) is None
+            ):
+                if self._one_object(request.thing) is None:
+                    self._topic(request.thing or "")  # the lemonade: refused as not in the world, not asked about
+                else:
+                    named[-1] = replace(previous, thing=request.thing)
+                    continue
+            named.append(request)
+        return named
+
+    def _one_object(self, phrase: str | None) -> str | None:
+        """The one object in the world the phrase names, if any (no pronoun, nothing vague or ambiguous)."""
+        if not phrase or phrase.strip() in OBJECT_PRONOUNS:
+            return None
+        try:
+            return self.names.object(phrase).name
+        except PlanningError:  # (a question to ask is one too)
+            return None
 
     def _steps(self, request: Request) -> _Said:
         action = request.action
@@ -250,7 +283,7 @@ class _Composer:
                 raise PlanningError(f"which object is {phrase!r}? name it, e.g. 'the red mug'")
             source = None
         else:
-            reference = self.names.object(phrase)
+            reference = self.names.object(_after_a_vague_head(phrase, self._one_object) or phrase)
             name, source = reference.name, reference.source
         if request.source:
             source = self._place(request.source)
@@ -311,6 +344,23 @@ class _Composer:
             Step("detect_object", {"object": obj}),
             Step("pick_object", {"object": obj}),
         ]
+
+
+# "something to drink", "anything to eat", "a drink": a thing named vaguely, which a name said after it makes one
+_VAGUE_HEAD = re.compile(
+    r"(?:something|anything)(?: (?:to (?:drink|eat)|for me to (?:drink|eat))(?: (?:from|out of))?)?|"
+    r"(?:a |some )?(?:drink|snack|beverage|refreshment)"
+)
+
+
+def _after_a_vague_head(phrase: str, one_object: Callable[[str], str | None]) -> str | None:
+    """ "something to drink the bottle" (a recogniser drops the comma): the name after a vague head, when that
+    names one object; None otherwise (the phrase is read as it is)."""
+    head = _VAGUE_HEAD.match(phrase.strip())
+    if head is None:
+        return None
+    rest = phrase.strip()[head.end() :].strip(" ,-")
+    return rest if rest and one_object(rest) is not None else None
 
 
 def _any_of(items: Iterable[str]) -> str:

@@ -251,6 +251,33 @@ def test_stop_with_more_words_is_a_stop_but_stop_there_ends_another_step(world) 
     ]
 
 
+@pytest.mark.parametrize(
+    "text", ["drive to the counter and stop next to it", "go to the counter and stop when you get close"]
+)
+def test_a_stop_that_says_where_or_when_a_walk_ends_is_where_it_ends(world, text: str) -> None:
+    assert plan(text, world) == [("navigate_to", "kitchen counter"), ("say", "I am at the kitchen counter.")]
+
+
+def test_an_object_named_after_a_vague_request_is_the_one_fetched_but_nothing_is_guessed(world) -> None:
+    fetch_bottle = [
+        ("navigate_to", "kitchen counter"),
+        ("detect_object", "blue bottle"),
+        ("pick_object", "blue bottle"),
+        ("say", "Here is the blue bottle."),
+    ]
+    assert plan("bring me something to drink, the bottle", world) == fetch_bottle
+    assert plan("Or bring me something to drink the bottle.", world) == fetch_bottle  # the comma not heard
+    assert plan("bring it to me, the water bottle", world) == fetch_bottle
+    with pytest.raises(ClarificationNeeded):
+        plan("bring me something to drink", world)
+    for out_of_world in ("bring me something to drink, the lemonade", "bring me something to drink the banana"):
+        with pytest.raises(PlanningError) as refused:
+            plan(out_of_world, world)
+        assert not isinstance(refused.value, ClarificationNeeded)
+    with pytest.raises(PlanningError):  # "or" between two places is no sequence (only a leading "or" is a filler)
+        plan("go to the dock, or the table", world)
+
+
 @pytest.mark.parametrize("text", ["kick the apple", "make me a cup of coffee", "dance for me", "go upstairs"])
 def test_what_is_no_ability_is_refused_with_what_the_robot_can_do(world, text: str) -> None:
     with pytest.raises(PlanningError) as refused:

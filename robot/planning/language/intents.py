@@ -126,6 +126,13 @@ _STOP = (
     r"(?: (?:stop|halt|freeze|now|right now|immediately|please|at once|robot|right there|there|everything|"
     r"moving|it|all))*"
 )
+# where or when a walk ends, said after it: "(go to the dock and) stop next to it", "stop once you get there"
+_STOP_AT_THE_END = (
+    r"(?:stop|halt|pull up|come to a stop)(?: (?:right|just))? (?:(?:next to|beside|by|near|in front of|close to|"
+    r"alongside|at|right by|right next to) (?:it|that|them|this|there|here)|(?:when|once|as soon as|after|where) "
+    r"you(?: will| have)? (?:get|arrive|are|reach|come|got|arrived)(?: (?:there|here|near|close|to it|it|near it|"
+    r"close to it|next to it|in front of it))?)"
+)
 _AROUND = (
     r"(?: (?:around you|around|here|in the room|right now|in front of you|near you|nearby|over there|there|"
     r"from where you are|from there|from here))?"
@@ -226,6 +233,7 @@ def _shapes() -> tuple[tuple[re.Pattern[str], Build], ...]:
     )
     shapes: list[tuple[str, Build]] = [
         (_STOP, lambda m, c: Step("stop")),
+        (_STOP_AT_THE_END, lambda m, c: Step("stop")),
         (rf"{_GO_TO} (?P<place>.+)", _go),  # "off you go, to the kitchen"
         # "and tell me when you're done": the plan's last step says so anyway
         (
@@ -278,7 +286,8 @@ def _shapes() -> tuple[tuple[re.Pattern[str], Build], ...]:
         (
             rf"{go_first}(?:{verbs(*FIND_VERBS)}(?: out| me| us)?|{verbs('look')} (?:around |about |everywhere )?for|"
             rf"{verbs('search', 'check')}(?: (?:around|everywhere|{_ROOMS}))? for|"
-            rf"{verbs('hunt')}(?: around)? for|(?:have|take) a look(?: around)? for|check for|see if you can "
+            rf"{verbs('hunt')}(?: around)? for|(?:have|take) a look(?: around)? for|check for|"
+            r"(?:look out|keep an eye out|keep a look out|watch out|watch) for|see if you can "
             r"(?:find|spot|see)|try to find|see|spot) (?P<thing>.+?)(?: (?:anywhere|around|here|in the room|"
             r"around here|nearby))?",
             _find,

@@ -47,7 +47,8 @@ CLAUSE_VERBS = (
 
 # said before the request ("could you please", "hey robot", "I'd like you to")
 FILLER_PREFIXES = word_list("""
-    would you be so kind as to, would you be so kind and, is there any chance you could, any chance you could,
+    would you be so kind as to, would you be so kind and, would you be so kind to, will you be so kind as to,
+    could you be so kind as to, be so kind as to, is there any chance you could, any chance you could,
     do you think you could, i wonder if you could, i was wondering if you could, it would be great if you could,
     i would love it if you, i would like it if you, i would love you to, i would like you to, i want you to,
     i need you to, i am asking you to, if you do not mind, if you could, if you would, if you can,
