@@ -43,14 +43,16 @@ def behaviours(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(robot_module, "discover", lambda: registry)
 
 
-def wait_status(client: TestClient, state: str, timeout_s: float = 30.0) -> dict:
+def wait_status(client: TestClient, state: str | None, timeout_s: float = 30.0, name: str | None = None) -> dict:
+    """The status once its behaviour is in `state` (None: any) and, if given, is `name` (the status is the robot's
+    published state: a start's 202 comes before the state that shows it)."""
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         status = client.get("/api/behaviours/status").json()
-        if status is not None and status["state"] == state:
+        if status is not None and state in (None, status["state"]) and name in (None, status["name"]):
             return status
         time.sleep(0.05)
-    raise AssertionError(f"the behaviour never became {state}: {client.get('/api/behaviours/status').json()}")
+    raise AssertionError(f"the behaviour never became {name} {state}: {client.get('/api/behaviours/status').json()}")
 
 
 def test_list_start_pause_resume_and_stop(client: TestClient) -> None:
@@ -108,8 +110,8 @@ def test_typed_commands_start_and_stop_behaviours(client: TestClient) -> None:
     wait_status(client, "stopped")
     tour = client.post("/api/commands", json={"text": "give a tour of the kitchen"})
     assert tour.status_code == 202
-    status = client.get("/api/behaviours/status").json()
-    assert status["name"] == "tour" and status["params"] == {"places": ["kitchen counter"]}
+    status = wait_status(client, None, name="tour")
+    assert status["params"] == {"places": ["kitchen counter"]}
     failed = wait_status(client, "failed")  # this robot has no perception: it cannot walk to the kitchen
     assert "lidar" in failed["reason"]
 
