@@ -9,7 +9,8 @@ the simulator's truth rather than by what the behaviour says.
 - tour: the places presented of all the places (a stop counts when the robot stood within `PRESENTED_M` of the
   place's approach as it said its sentence).
 - fetch: an object not in the camera's view at the start, brought to where the robot started: held in the hand
-  at the end, the robot within `DELIVERED_M` of its start.
+  at the end (it touches the robot and nothing else: a bottle gripped by its side has its centre 6 cm from the
+  hand, so a distance cannot tell), the robot within `DELIVERED_M` of its start.
 - demo: every gesture performed, a typed command answered between them, without a fall.
 
 Bars (issue 37): >= 10 seeds each; patrol >= 95 % of waypoints, 0 falls, 0 collisions; tour >= 90 % complete;
@@ -32,7 +33,6 @@ REACHED_M = 0.25  # within this of a waypoint (its open-floor point), the robot 
 AWAY_M = 0.6  # ... and once this far from it again, a later pass is a new visit
 PRESENTED_M = 0.35
 DELIVERED_M = 0.35
-HELD_M = 0.06  # the object's centre this close to the hand: held
 DEMO_COMMAND = "what can you do"
 FOOT_BODIES = ("l_ank_roll_link", "r_ank_roll_link")
 GROUND_GEOMS = ("floor", "charging_dock")
@@ -71,14 +71,22 @@ class Judge:
             elif distance > AWAY_M:
                 self.near[name] = False
 
+    def in_hand(self, body_name: str) -> bool:
+        """The body touches the robot and nothing else: held off the floor and the furniture."""
+        model, data = self.backend.model, self.backend.data
+        body = model.body(body_name).id
+        robot = other = False
+        for a, b in _contact_pairs(data):
+            for mine, theirs in ((a, b), (b, a)):
+                if int(model.geom_bodyid[mine]) == body:
+                    robot |= theirs in self._robot
+                    other |= theirs not in self._robot
+        return robot and not other
+
     def _contacts(self, held: str | None, sim_time_s: float) -> None:
         """The contacts now (read beside the control thread stepping the simulation: a copy, taken whole or not)."""
         model, data = self.backend.model, self.backend.data
-        try:
-            pairs = np.array(data.contact.geom, dtype=int).reshape(-1, 2)
-        except (IndexError, ValueError):
-            return
-        for a, b in pairs:
+        for a, b in _contact_pairs(data):
             if (a in self._robot) == (b in self._robot):
                 continue  # the robot with itself, or the world with itself
             mine, other = (a, b) if a in self._robot else (b, a)
@@ -91,6 +99,17 @@ class Judge:
             touched = f"{model.body(int(model.geom_bodyid[mine])).name} with {what}"
             if not any(c["what"] == touched for c in self.collisions):
                 self.collisions.append({"what": touched, "sim_s": round(sim_time_s, 2)})
+
+
+def _contact_pairs(data: Any) -> np.ndarray:
+    """The geom pairs in contact now, read beside the control thread stepping the simulation: a copy, taken whole
+    (a read torn by a step is taken again)."""
+    for _ in range(10):
+        try:
+            return np.array(data.contact.geom, dtype=int).reshape(-1, 2)
+        except (IndexError, ValueError):
+            continue
+    return np.zeros((0, 2), dtype=int)
 
 
 def run_one(behaviour: str, seed: int) -> dict[str, Any]:
@@ -136,8 +155,7 @@ def run_one(behaviour: str, seed: int) -> dict[str, Any]:
     with tempfile.TemporaryDirectory() as tmp:
         settings = Settings(database_url=f"sqlite:///{tmp}/bench.db", audio_dir=f"{tmp}/audio", enable_mirror=False)
         result = run_behaviour(behaviour, params, seed, settings, TIMEOUT_S, during=during, worker=worker)
-        hand = np.array(backend.data.site("right_hand").xpos, dtype=float)
-        truth = _truth(behaviour, result, judge, layout, backend, hand, said[0])
+        truth = _truth(behaviour, result, judge, layout, backend, said[0])
     return {
         "behaviour": behaviour,
         "seed": seed,
@@ -150,6 +168,7 @@ def run_one(behaviour: str, seed: int) -> dict[str, Any]:
         "sim_s": result["sim_time_s"],
         "wall_s": result["wall_time_s"],
         "dropped_box": None if blocker is None else blocker.dropped_at,
+        "feedback": result["feedback"],
         **{k: v for k, v in truth.items() if k != "ok"},
     }
 
@@ -165,7 +184,7 @@ def _out_of_view(worker: Any, layout: Any, seed: int) -> str:
 
 
 def _truth(
-    behaviour: str, result: dict[str, Any], judge: Judge, layout: Any, backend: Any, hand: np.ndarray, said: bool
+    behaviour: str, result: dict[str, Any], judge: Judge, layout: Any, backend: Any, said: bool
 ) -> dict[str, Any]:
     if behaviour == "patrol":
         laps = int(result["params"].get("laps", 2))
@@ -187,8 +206,7 @@ def _truth(
         from robot.model.scene import object_body_name
 
         obj = result["params"].get("object", "")
-        position = np.array(backend.data.body(object_body_name(obj)).xpos, dtype=float)
-        held = float(np.linalg.norm(position - hand)) < HELD_M
+        held = judge.in_hand(object_body_name(obj))
         base = np.array(backend.data.qpos[:2], dtype=float)
         home = math.dist(tuple(base), layout.robot_start[:2]) < DELIVERED_M
         return {"ok": held and home, "held_at_end": held, "at_start": home, "object": obj}

@@ -25,7 +25,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar
 
-from robot.behaviours.errors import BadParameter, BehaviourFailed
+from robot.behaviours.errors import BadParameter, BehaviourFailed, NoRoomToGesture
 from robot.interface import BehaviourInfo, BehaviourParam
 
 if TYPE_CHECKING:
@@ -33,7 +33,7 @@ if TYPE_CHECKING:
 
 # The parameter types a behaviour may declare, by the name the console and the CLI show.
 KINDS: dict[Any, str] = {int: "int", float: "float", str: "str", bool: "bool", list: "list[str]"}
-__all__ = ["BadParameter", "Behaviour", "BehaviourFailed", "Param"]
+__all__ = ["BadParameter", "Behaviour", "BehaviourFailed", "NoRoomToGesture", "Param"]
 
 DEFAULT_STEP_TIMEOUT_S = 300.0  # simulated seconds one state's step may take before the behaviour is ended
 

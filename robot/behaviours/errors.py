@@ -7,6 +7,11 @@ class BehaviourFailed(Exception):
     """A behaviour gives up: the message is the reason the operator sees."""
 
 
+class NoRoomToGesture(BehaviourFailed):
+    """An arm gesture was not made: something is within the arm's reach wherever the robot could turn. The robot
+    has not moved its arm; a show can carry on without that gesture."""
+
+
 class BadParameter(ValueError):
     """A parameter was refused: `name` is the parameter, the message says why."""
 

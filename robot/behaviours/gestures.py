@@ -10,9 +10,11 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
+from robot.behaviours.arm_room import WAVE_SWEEP, Sweep, occupied_cells, point_sweep, turn_for_room
 from robot.control.head import DEFAULT_TILT
 from robot.manipulation.arm_motion import JointMove, Move
 from robot.model import humanoid_v1
+from robot.perception.geometry import yaw_of
 from robot.planning.executor import ExecutionContext, StepFailed
 from robot.skills.body import BodyParts
 
@@ -96,17 +98,45 @@ def shake_targets() -> list[tuple[float, float]]:
     return [(sign * SHAKE_PAN_RAD, DEFAULT_TILT) for _ in range(HEAD_REPEATS) for sign in (1, -1)]
 
 
+class NoRoom(StepFailed):
+    """Something on the map is within the arm's sweep wherever the robot may face: the arm stays down."""
+
+
+def make_room(parts: BodyParts, sweep: Sweep, turn: Callable[[float], None] | None, what: str) -> str:
+    """Clear floor on the lidar's map where the arm will sweep: turned in place to find it if `turn` is given;
+    `StepFailed` when there is none. What was done, for the gesture's report ("" when nothing was needed)."""
+    perception = parts.perception
+    grid = perception.feed().map if perception is not None else None
+    if grid is None:
+        return ""  # no map (a robot without a lidar): nothing known to be in the way
+    position, rotation = parts.localiser.map_trunk()
+    pose = (float(position[0]), float(position[1]), yaw_of(rotation))
+    if turn is None:
+        angle = 0.0 if occupied_cells(grid, pose, sweep) == 0 else None
+    else:
+        angle = turn_for_room(grid, pose, sweep)
+    if angle is None:
+        raise NoRoom(f"no room to {what}: something on the map is within the arm's reach")
+    if angle == 0.0:
+        return ""
+    assert turn is not None
+    turn(angle)
+    return f" (turned {math.degrees(angle):.0f} deg first, away from something within the arm's reach)"
+
+
 def perform(
     name: str,
     parts: BodyParts,
     ctx: ExecutionContext,
     aim: Callable[[], float] | None = None,
+    turn: Callable[[float], None] | None = None,
 ) -> str:
     """Play gesture `name`; `aim` (for "point") turns the robot to face the target and returns how far below the
-    horizontal it is (rad)."""
+    horizontal it is (rad); `turn` turns the robot in place (rad) to give a wave room."""
     if name == "wave":
+        turned = make_room(parts, WAVE_SWEEP, turn, "wave")
         play_arm(parts, ctx, wave_moves())
-        return "waved"
+        return "waved" + turned
     if name == "nod":
         play_head(parts, ctx, nod_targets())
         return "nodded"
@@ -116,6 +146,8 @@ def perform(
     if name == "point":
         if aim is None:
             raise StepFailed("pointing needs something to point at")
-        play_arm(parts, ctx, point_moves(aim()))
+        pitch_down = aim()
+        make_room(parts, point_sweep(pitch_down), None, "point")
+        play_arm(parts, ctx, point_moves(pitch_down))
         return "pointed"
     raise StepFailed(f"unknown gesture {name!r} (known: {', '.join(GESTURES)})")

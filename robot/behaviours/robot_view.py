@@ -12,8 +12,8 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from robot.behaviours.errors import BehaviourFailed
-from robot.behaviours.gestures import perform
+from robot.behaviours.errors import BehaviourFailed, NoRoomToGesture
+from robot.behaviours.gestures import NoRoom, perform
 from robot.behaviours.routes import waypoint_near
 from robot.interface import DetectedObject, KnownObject, OccupancyMap, Plan, Step
 from robot.model.world import Place, WorldLayout
@@ -191,8 +191,13 @@ class BehaviourRobot:
             distance = math.hypot(known.position[0] - x, known.position[1] - y)
             return math.atan2(shoulder_height - known.position[2], max(distance, 0.1))
 
+        def turn(angle: float) -> None:
+            self._skills.detect.looking(self._ctx).turn_in_place(angle)
+
         try:
-            return perform(name, self._parts, self._ctx, aim if at is not None else None)
+            return perform(name, self._parts, self._ctx, aim if at is not None else None, turn)
+        except NoRoom as exc:
+            raise NoRoomToGesture(str(exc)) from exc
         except StepFailed as exc:
             raise BehaviourFailed(str(exc)) from exc
 

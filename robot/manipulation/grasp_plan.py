@@ -53,11 +53,52 @@ def grasp_stance(
 ) -> Stance:
     """The pose to stand at, facing `facing_yaw`, to have the object at GRASP_OFFSET from the feet. Given the map
     (`blocked`: is this point taken?), a stance with something close on its left (a wall at the counter's end) moves
-    right instead, with the object at CROWDED_LEFT_OFFSET."""
+    right instead, with the object at CROWDED_LEFT_OFFSET; one where something stands (a chair by the counter) moves
+    to the nearest other place in the reach window that is free (the caller checks `stance_taken`: none may be)."""
     stance = _stance_with_object_at(object_xy, facing_yaw, GRASP_OFFSET)
-    if blocked is not None and room_on_left(stance.x, stance.y, stance.yaw, blocked) < STANCE_LEFT_ROOM_M:
+    if blocked is None:
+        return stance
+    if room_on_left(stance.x, stance.y, stance.yaw, blocked) < STANCE_LEFT_ROOM_M:
         stance = _stance_with_object_at(object_xy, facing_yaw, CROWDED_LEFT_OFFSET)
+    if not stance_taken(stance, blocked):
+        return stance
+    for offset in SHIFTED_OFFSETS:
+        shifted = _stance_with_object_at(object_xy, facing_yaw, offset)
+        if not stance_taken(shifted, blocked):
+            return shifted
     return stance
+
+
+# Where the robot's feet, shins and hanging hands are, around a stance (stance frame, m: x ahead, y to the left):
+# the hands hang 0.2 m out to the sides, low. Nothing on the map may be there (the last steps onto a stance are
+# walked without the map: at world seed 0 the robot pushed a chair for 30 s trying to stand where it stood).
+STANCE_FOOTPRINT_X = (-0.12, 0.08)
+STANCE_FOOTPRINT_Y = (-0.22, 0.22)
+# Other places of the object in the feet frame, inside the reach window with REACH_MARGIN_M to spare, nearest the
+# usual one first: where to stand instead when something stands on the usual stance.
+SHIFTED_OFFSETS = tuple(
+    sorted(
+        ((x, y) for x in (0.29, 0.31, 0.33) for y in (-0.17, -0.14, -0.11, -0.08, -0.05)),
+        key=lambda o: math.dist(o, GRASP_OFFSET),
+    )
+)
+
+
+def no_room_to_stand(what: str, stance: Stance) -> str:
+    return (
+        f"no room to stand where the hand reaches the {what}: something on the map stands at "
+        f"({stance.x:.2f}, {stance.y:.2f}), where the robot's feet would be"
+    )
+
+
+def stance_taken(stance: Stance, blocked: Callable[[float, float], bool]) -> bool:
+    """Something on the map where the robot would stand at `stance` (checked every 4 cm over its footprint)."""
+    c, s = math.cos(stance.yaw), math.sin(stance.yaw)
+    for ahead in np.arange(STANCE_FOOTPRINT_X[0], STANCE_FOOTPRINT_X[1] + 1e-9, 0.04):
+        for left in np.arange(STANCE_FOOTPRINT_Y[0], STANCE_FOOTPRINT_Y[1] + 1e-9, 0.04):
+            if blocked(stance.x + c * ahead - s * left, stance.y + s * ahead + c * left):
+                return True
+    return False
 
 
 def _stance_with_object_at(object_xy: tuple[float, float], yaw: float, offset: tuple[float, float]) -> Stance:

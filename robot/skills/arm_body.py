@@ -11,7 +11,14 @@ import numpy as np
 
 from robot.control.head import DEFAULT_TILT
 from robot.manipulation.arm_motion import Move
-from robot.manipulation.grasp_plan import Stance, carry_moves, comfortably_in_reach, grasp_stance
+from robot.manipulation.grasp_plan import (
+    Stance,
+    carry_moves,
+    comfortably_in_reach,
+    grasp_stance,
+    no_room_to_stand,
+    stance_taken,
+)
 from robot.manipulation.pick import PickFailed
 from robot.manipulation.stand_up import arm_back_moves, standing_up_with
 from robot.model import humanoid_v1
@@ -78,6 +85,9 @@ class ArmBody:
         return comfortably_in_reach(self.to_feet(point_in_map))
 
     def go_to(self, stance: Stance, reach: np.ndarray | None = None) -> None:
+        blocked = self._blocked()
+        if blocked is not None and stance_taken(stance, blocked):
+            raise PickFailed(no_room_to_stand("object", stance))
         good_stop = None if reach is None else (lambda: self.comfortably_reaches(reach))
         self._parts.head.point(0.0, DEFAULT_TILT)
         back = (stance.x - STAGING_BACK_M * math.cos(stance.yaw), stance.y - STAGING_BACK_M * math.sin(stance.yaw))

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from robot.manipulation.grasp_plan import grasp_stance
+from robot.manipulation.grasp_plan import grasp_stance, no_room_to_stand, stance_taken
 from robot.manipulation.pick import PickFailed, pick
 from robot.manipulation.place import PlaceFailed, choose_spot, spots_in_reach
 from robot.manipulation.place import place as place_held
@@ -173,7 +173,10 @@ class ManipulateSkill:
             name = self._world().resolve_object(step.args["object"]) or step.args["object"]
             remembered = perception.memory.get(name)
             if remembered is not None and place.surface.contains(*remembered.position[:2]):
-                stance = grasp_stance(remembered.position[:2], place.approach[2], self.map_blocked())
+                blocked = self.map_blocked()
+                stance = grasp_stance(remembered.position[:2], place.approach[2], blocked)
+                if blocked is not None and stance_taken(stance, blocked):
+                    raise StepFailed(no_room_to_stand(name, stance))
                 return (stance.x, stance.y, stance.yaw), functools.partial(self._remembered_in_reach, name, arm)
         return place.approach, None
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import re
 
-from robot.behaviours.api import Behaviour, BehaviourFailed, Param
+from robot.behaviours.api import Behaviour, BehaviourFailed, NoRoomToGesture, Param
 from robot.behaviours.robot_view import BehaviourRobot
 
 GESTURE_WORDS = {"wave": "wave", "nod": "nod", "shake": "shake_head", "shake your head": "shake_head"}
@@ -42,8 +42,8 @@ class Demo(Behaviour):
     def step(self, state: str, robot: BehaviourRobot) -> str | None:
         if state == "greeting":
             robot.say("Hello! I am a small humanoid robot. Welcome to my demo.")
-            robot.gesture("wave")
-            robot.feedback("greeted with a wave")
+            if (done := _gesture_if_room(robot, "wave")) is not None:
+                robot.feedback("greeted with a wave" + _detail(done))
             return "explaining"
         if state == "explaining":
             robot.say(what_i_can_do())
@@ -54,7 +54,7 @@ class Demo(Behaviour):
         if state == "listening":
             return self._listen(robot)
         robot.say("That is the end of my demo. Thank you for watching!")
-        robot.gesture("wave")
+        _gesture_if_room(robot, "wave")
         return None
 
     def _gesture(self, robot: BehaviourRobot) -> str:
@@ -65,11 +65,10 @@ class Demo(Behaviour):
                 robot.feedback("nothing seen to point at")
             else:
                 robot.say(f"That is the {target}.")
-                robot.gesture("point", at=target)
-                robot.feedback(f"pointed at the {target}")
-        else:
-            robot.gesture(gesture)
-            robot.feedback(f"gesture: {gesture.replace('_', ' ')}")
+                if (done := _gesture_if_room(robot, "point", target)) is not None:
+                    robot.feedback(f"pointed at the {target}" + _detail(done))
+        elif (done := _gesture_if_room(robot, gesture)) is not None:
+            robot.feedback(f"gesture: {gesture.replace('_', ' ')}" + _detail(done))
         self.done.append(gesture)
         total = len(self.gestures) * self.params["rounds"]
         robot.progress(len(self.done) / total)
@@ -95,11 +94,11 @@ class Demo(Behaviour):
             if target is None:
                 robot.say("I do not know that object.")
                 return
-            robot.gesture("point", at=target)
+            _gesture_if_room(robot, "point", target)
             return
         gesture = next((g for word, g in GESTURE_WORDS.items() if re.search(rf"\b{word}\b", said)), None)
         if gesture is not None:
-            robot.gesture(gesture)
+            _gesture_if_room(robot, gesture)
             return
         try:
             robot.feedback("did: " + robot.run_command(text))
@@ -121,6 +120,22 @@ class Demo(Behaviour):
             return None
         x, y, _ = robot.pose()
         return min(known, key=lambda k: (k.position[0] - x) ** 2 + (k.position[1] - y) ** 2).name
+
+
+def _gesture_if_room(robot: BehaviourRobot, name: str, at: str | None = None) -> str | None:
+    """A gesture (what was done), or None and a line saying why it was left out when the arm has no room: the
+    show goes on."""
+    try:
+        return robot.gesture(name, at=at)
+    except NoRoomToGesture as exc:
+        robot.say("I will not move my arm here: something is too close.")
+        robot.feedback(f"left out {name.replace('_', ' ')}: {exc}")
+        return None
+
+
+def _detail(done: str) -> str:
+    """The part of a gesture's report in brackets (" (turned 45 deg first, ...)"), if any."""
+    return done[done.index(" (") :] if " (" in done else ""
 
 
 def what_i_can_do() -> str:

@@ -1,0 +1,68 @@
+"""Room for an arm gesture: what the arm sweeps is checked on the lidar's map, and the robot turns until it is clear
+(or gives the gesture up when nowhere is); on world 0, where a plant stands beside the start, the demo's waves no
+longer come down on it (they overloaded the shoulder and latched the e-stop)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from robot.behaviours.arm_room import WAVE_SWEEP, occupied_cells, point_sweep, turn_for_room
+from robot.interface import OccupancyMap
+from robot.model.world import generate_world
+
+RESOLUTION = 0.05
+
+
+def grid_with(*boxes: tuple[float, float, float, float]) -> OccupancyMap:
+    """A 4 x 4 m map centred on the origin, occupied in each box (x0, x1, y0, y1)."""
+    size = 80
+    data = np.zeros((size, size), dtype=np.int8)
+    origin = (-2.0, -2.0)
+    for x0, x1, y0, y1 in boxes:
+        for j in range(size):
+            for i in range(size):
+                x, y = origin[0] + (i + 0.5) * RESOLUTION, origin[1] + (j + 0.5) * RESOLUTION
+                if x0 <= x <= x1 and y0 <= y <= y1:
+                    data[j, i] = 100
+    return OccupancyMap(0.0, RESOLUTION, origin, size, size, data.tobytes(), 1)
+
+
+def test_an_obstacle_beside_the_right_arm_blocks_a_wave_and_a_turn_clears_it() -> None:
+    plant = grid_with((-0.1, 0.1, -0.5, -0.35))  # 35-50 cm to the right of a robot facing +x
+    assert occupied_cells(plant, (0.0, 0.0, 0.0), WAVE_SWEEP) > 0
+    turn = turn_for_room(plant, (0.0, 0.0, 0.0), WAVE_SWEEP)
+    assert turn is not None and turn != 0.0
+    assert occupied_cells(plant, (0.0, 0.0, turn), WAVE_SWEEP) == 0
+    # the same plant on the robot's left, or the robot already turned away: nothing to do
+    assert turn_for_room(plant, (0.0, 0.0, math.pi), WAVE_SWEEP) == 0.0
+    assert turn_for_room(grid_with((-0.1, 0.1, 0.35, 0.5)), (0.0, 0.0, 0.0), WAVE_SWEEP) == 0.0
+
+
+def test_a_robot_boxed_in_has_no_room_and_far_things_do_not_count() -> None:
+    ring = grid_with((-0.6, 0.6, -0.6, -0.3), (-0.6, 0.6, 0.3, 0.6), (-0.6, -0.3, -0.6, 0.6), (0.3, 0.6, -0.6, 0.6))
+    assert turn_for_room(ring, (0.0, 0.0, 0.0), WAVE_SWEEP) is None
+    far = grid_with((-0.1, 0.1, -1.2, -0.8))
+    assert turn_for_room(far, (0.0, 0.0, 0.0), WAVE_SWEEP) == 0.0
+
+
+def test_pointing_lower_reaches_less_far_ahead() -> None:
+    counter = grid_with((0.30, 0.6, -0.5, 0.5))  # furniture 30 cm ahead
+    assert occupied_cells(counter, (0.0, 0.0, 0.0), point_sweep(0.0)) > 0  # level: the hand would reach it
+    assert occupied_cells(counter, (0.0, 0.0, 0.0), point_sweep(1.0)) == 0  # well below level: it stays short
+    assert point_sweep(0.0).x[1] > point_sweep(0.5).x[1] > point_sweep(1.0).x[1]
+
+
+def test_the_demo_beside_a_plant_turns_before_waving_and_never_touches_it() -> None:
+    from bench.behaviours import run_one
+
+    layout = generate_world(0)
+    plant = next(o for o in layout.obstacles if o.name.startswith("plant"))
+    start = layout.robot_start
+    assert math.dist((plant.x, plant.y), start[:2]) < 0.55  # the world this test is about: a plant at arm's length
+    result = run_one("demo", 0)
+    touched = [c["what"] for c in result["collisions"] if plant.name in c["what"]]
+    assert touched == [] and result["fell"] is False
+    assert result["success"] is True, result["reason"]
+    assert any(line.startswith("greeted with a wave (turned") for line in result["feedback"])
