@@ -295,6 +295,8 @@ DEV: tuple[LanguageCase, ...] = (
     _e("action synonym", "go back where you came from", HOME),
     _e("action synonym", "come home", HOME),
     _o("incomplete", "wait"),
+    # a short word one slip from a name's word is that word, not the name ("up" is no "cup"): heard for "a beer"
+    _o("incomplete", "bring me up here"),
     _e("action synonym", "wait ten secs", wait("10")),
     _e("action synonym", "pause for a few seconds", wait("3")),
     _e("action synonym", "wait 1 minute", wait("60")),

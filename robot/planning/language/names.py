@@ -43,6 +43,8 @@ NEAR_MISS_WORD_MIN = 55.0
 NEAR_MISS_REGROUPED_MIN = 88.0
 # ...and it must be this much closer to one thing than to any other; else the two are too close to call
 NEAR_MISS_MARGIN = 6.0
+# ...and a word said alone must have this many letters: shorter ones are other words one slip away ("up" ~ "cup")
+NEAR_MISS_MIN_LETTERS = 3
 
 _LOCATION = re.compile(
     r"^(?P<head>.+?) (?:(?:that|which) is |is |that s |sitting |lying |standing |over |right |up |down )*"
@@ -291,6 +293,8 @@ def _likeness(words: str, surface: str) -> float:
     said, named = words.split(), surface.split()
     if len(said) == len(named) == 1 and DamerauLevenshtein.distance(words, surface) > 1:
         return 0.0  # one word: one slip ("bottel", "aple"), not another word ("basket" is no "base")
+    if len(said) == len(named) == 1 and len(words) < NEAR_MISS_MIN_LETTERS:
+        return 0.0  # "up" is one slip from "cup", but a word of its own ("bring me up here" heard for "a beer")
     if len(said) != len(named):
         return score if score >= NEAR_MISS_REGROUPED_MIN else 0.0
     if any(a != b and fuzz.ratio(a, b) < NEAR_MISS_WORD_MIN for a, b in zip(said, named, strict=True)):
