@@ -26,8 +26,10 @@ from harness.spoken_cases import SETS, SpokenSet, Voice
 from robot.events import EventBus
 from robot.interface import CommandReply
 from robot.model.world import generate_world
+from robot.planning.context import PlanningContext
+from robot.planning.heard import first_readable
 from robot.planning.pipeline import PlannerConfig, build_pipeline
-from robot.planning.planner import PlanningError
+from robot.planning.planner import ClarificationNeeded, PlanningError
 from robot.planning.world_context import WorldContext, normalize
 from robot.speech.asr import SpeechRecognizer
 from robot.speech.audio import RATE, Audio, add_noise
@@ -96,27 +98,38 @@ class Heard:
     errors: int
     words: int
     exact: bool  # the transcript's words are the sentence's (as word error rate counts them)
-    plan_right: bool | None  # None: a stop utterance (judged by the stop figures)
-    planned: bool  # the planner made a plan of the transcript
+    plan_right: bool | None  # None: a stop utterance (judged by the stop figures); out of the world: no plan
+    planned: bool  # the planner made a plan of the transcript (or of one of the recogniser's other wordings)
     decode_ms: float
     plan_ms: float
     spot_ms: float
     spotted_stop: bool
     transcript_stop: bool
+    asked: bool = False  # the plan is of another wording the recogniser heard: it waits for the operator's yes
 
 
-def _plan(planner, text: str, case: Case | None, layout) -> tuple[bool | None, bool, float]:
-    if case is None:
-        return None, False, 0.0
+def _plan(
+    planner, text: str, case: Case | None, layout, alternatives: tuple[str, ...] = ()
+) -> tuple[bool | None, bool, float, bool]:
+    """(plan right, a plan was made, planning ms, the plan is of one of the recogniser's other wordings: the robot
+    asks "did you mean ...?" before running it). With no case (a request out of the world), right is no plan."""
     started = time.perf_counter()
+    context = context_for(case, layout) if case is not None else PlanningContext(WorldContext.from_layout(layout))
+    result, asked = None, False
     try:
-        result = planner.plan(text, context_for(case, layout)) if text else None
+        result = planner.plan(text, context) if text else None
+    except ClarificationNeeded:
+        pass
     except PlanningError:
-        result = None
+        heard = first_readable(planner, alternatives, context) if text else None
+        if heard is not None:
+            result, asked = heard[1], True
     elapsed = (time.perf_counter() - started) * 1000
+    if case is None:
+        return result is None, result is not None, elapsed, asked
     if result is None:
-        return False, False, elapsed
-    return plan_matches(case.plan, result.plan.to_seed_list()), True, elapsed
+        return False, False, elapsed, False
+    return plan_matches(case.plan, result.plan.to_seed_list()), True, elapsed, asked
 
 
 def run_set(
@@ -136,6 +149,7 @@ def run_set(
     spotter = StopSpotter(world.objects, world.places)
     items: list[tuple[str, str, Case | None]] = [("command", c.text, c) for c in spoken.commands]
     items += [("with_stop", c.text, c) for c in spoken.with_stop] + [("stop", t, None) for t in spoken.stops]
+    items += [("out_of_world", t, None) for t in spoken.out_of_world]
     results = []
     seed = 0
     for kind, text, case in items:
@@ -146,7 +160,12 @@ def run_set(
                 verdict = spotter.spot(audio)
                 for engine, recognizer in recognizers.items():
                     transcript = recognizer.transcribe(audio)
-                    right, planned, plan_ms = _plan(planner, transcript.text, case, layout)
+                    if kind == "stop":
+                        right, planned, plan_ms, asked = None, False, 0.0, False
+                    else:
+                        right, planned, plan_ms, asked = _plan(
+                            planner, transcript.text, case, layout, transcript.alternatives
+                        )
                     errors, words = word_errors(wer_words(text), wer_words(transcript.text))
                     results.append(
                         Heard(
@@ -168,6 +187,7 @@ def run_set(
                             verdict.decode_s * 1000,
                             verdict.stop,
                             is_stop_utterance(transcript.text),
+                            asked,
                         )
                     )
     return results
@@ -188,6 +208,7 @@ def summarise(results: list[Heard]) -> dict[str, Any]:
                 "clean": _group([r for r in mine if r.snr_db is None]),
                 "noisy_10db_brown": _group([r for r in mine if r.snr_db is not None]),
                 "stop": _stops(mine),
+                "out_of_world": _out_of_world([r for r in mine if r.kind == "out_of_world"]),
                 "confidence": _confidence(mine),
             }
         out[set_name] = per_set
@@ -195,7 +216,7 @@ def summarise(results: list[Heard]) -> dict[str, Any]:
 
 
 def _group(selected: list[Heard]) -> dict[str, Any]:
-    commands = [r for r in selected if r.kind != "stop"]
+    commands = [r for r in selected if r.kind in COMMAND_KINDS]
     judged = [r for r in commands if r.plan_right is not None]
     errors = sum(r.errors for r in commands)
     words = sum(r.words for r in commands)
@@ -206,6 +227,9 @@ def _group(selected: list[Heard]) -> dict[str, Any]:
         "wer": round(errors / words, 4) if words else None,
         "wer_everyday": _wer([r for r in commands if r.kind == "command"]),
         "plan_right": _rate([bool(r.plan_right) for r in judged]),
+        # of the right plans, those of another wording the recogniser heard (the robot asks before running them)
+        "plan_right_asked_first": _rate([bool(r.plan_right) and r.asked for r in judged]),
+        "plan_right_as_heard": _rate([bool(r.plan_right) and not r.asked for r in judged]),
         "transcript_exact": _rate([r.exact for r in commands]),
         "decode_ms_p50": round(float(np.percentile([r.decode_ms for r in commands] or [0], 50)), 1),
         "end_of_speech_to_plan_ms": {
@@ -213,6 +237,17 @@ def _group(selected: list[Heard]) -> dict[str, Any]:
             "p90": round(float(np.percentile(latency, 90)), 1),
         },
         "with_stop_check_ms": {"p50": round(float(np.percentile(with_spot, 50)), 1)},
+    }
+
+
+def _out_of_world(selected: list[Heard]) -> dict[str, Any]:
+    """Requests for what is not in the world or not an ability: refused, asked about (a plan of another wording,
+    waiting for the operator), or planned as heard (acted on: wrong)."""
+    return {
+        "utterances": len(selected),
+        "refused": _rate([not r.planned for r in selected]),
+        "asked_about": _rate([r.planned and r.asked for r in selected]),
+        "planned_as_heard": _rate([r.planned and not r.asked for r in selected]),
     }
 
 
@@ -252,8 +287,8 @@ def _confidence(mine: list[Heard]) -> dict[str, Any]:
     """Whether "run when sure" can be trusted: of the transcripts sure enough to run unasked, how many were right."""
     from robot.speech.asr import AUTO_RUN_CONFIDENCE
 
-    commands = [r for r in mine if r.kind != "stop" and r.plan_right is not None]
-    sure = [r for r in commands if r.confidence >= AUTO_RUN_CONFIDENCE and r.planned]
+    commands = [r for r in mine if r.kind in COMMAND_KINDS and r.plan_right is not None]
+    sure = [r for r in commands if r.confidence >= AUTO_RUN_CONFIDENCE and r.planned and not r.asked]
     return {
         "threshold": AUTO_RUN_CONFIDENCE,
         "exact_mean": _mean([r.confidence for r in commands if r.exact]),
@@ -338,6 +373,7 @@ def run_robot_microphone_stops(phrases: tuple[str, ...] = ROBOT_STOPS, engine: s
 
 QUICK_ROBOT_STOPS = ("stop", "freeze")
 MISHEARD_SHOWN = 40  # per set
+COMMAND_KINDS = ("command", "with_stop")  # utterances with a plan to give
 
 
 def run_speech(
@@ -363,14 +399,23 @@ def run_speech(
     result["misheard"] = [
         r.__dict__
         for name in sets
-        for r in [r for r in results if r.set == name and r.kind != "stop" and r.plan_right is False][:MISHEARD_SHOWN]
+        for r in [r for r in results if r.set == name and r.kind in COMMAND_KINDS and r.plan_right is False][
+            :MISHEARD_SHOWN
+        ]
     ]
     result["wall_s"] = round(time.perf_counter() - started, 1)
     return result
 
 
 def _few(spoken: SpokenSet) -> SpokenSet:
-    return SpokenSet(spoken.name, spoken.voices[:1], spoken.commands[:1], spoken.stops[:1], spoken.with_stop[:1])
+    return SpokenSet(
+        spoken.name,
+        spoken.voices[:1],
+        spoken.commands[:1],
+        spoken.stops[:1],
+        spoken.with_stop[:1],
+        spoken.out_of_world[:1],
+    )
 
 
 def _bars(summary: dict[str, Any], robot: dict[str, Any] | None) -> dict[str, Any]:

@@ -62,6 +62,9 @@ class SpokenSet:
     commands: tuple[Case, ...]  # everyday wording, each with its plan
     stops: tuple[str, ...]  # an utterance that is a stop phrase, alone or with a few words: latches the e-stop
     with_stop: tuple[Case, ...]  # ordinary commands containing a stop word: no e-stop; plan as labelled
+    # requests for what is not in the world or not an ability: no plan (added at stop 58, after the sets' commands
+    # were measured; heldout2's were written then and only measured)
+    out_of_world: tuple[str, ...] = ()
 
 
 DEV = SpokenSet(
@@ -122,6 +125,16 @@ DEV = SpokenSet(
         Case("stop by the kitchen and get the mug", fetch(MUG)),
         Case("don't stop until you reach the table", go(TABLE)),
         Case("walk to the table without stopping", go(TABLE)),
+    ),
+    out_of_world=(
+        "bring me a beer",
+        "pick up the book",
+        "go to the garden",
+        "walk into the office",
+        "sing a song",
+        "open the window",
+        "tell me a joke",
+        "put the apple in the fridge",
     ),
 )
 
@@ -185,6 +198,16 @@ HELDOUT = SpokenSet(
         Case("bring the mug to the table and then stop moving", carry(MUG, TABLE)),
         Case("go to the charging dock and stop when you get there", go(DOCK)),
     ),
+    out_of_world=(
+        "bring me the banana",
+        "pick up my phone",
+        "go to the bedroom",
+        "take the apple to the garage",
+        "do a backflip",
+        "make me a cup of coffee",
+        "wash the red mug",
+        "play some music",
+    ),
 )
 
 # Written on 2026-11-28 (stop 57) before the planner and the recogniser's hints were changed with `HELDOUT`'s
@@ -246,6 +269,16 @@ HELDOUT2 = SpokenSet(
         Case("walk to the counter, then stop", go(COUNTER)),  # (as in HELDOUT: the stop is where the walk ends)
         Case("fetch the apple and don't stop for anything", fetch(APPLE)),
         Case("head to the charger and stop beside it", go(DOCK)),
+    ),
+    out_of_world=(
+        "fetch my slippers",
+        "grab the remote",
+        "go out to the garden shed",
+        "put the bottle in the sink",
+        "feed the cat",
+        "turn on the television",
+        "clean the kitchen floor",
+        "climb onto the table",
     ),
 )
 

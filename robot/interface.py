@@ -101,9 +101,12 @@ class PlanStatus:
 
 @dataclass(frozen=True)
 class RunCommand:
-    """A natural-language command: planned, validated, then executed."""
+    """A natural-language command: planned, validated, then executed. `alternatives`: other wordings a recogniser
+    heard nearly as likely (likeliest first); when `text` cannot be planned, the first that can is, and its plan
+    waits for the operator's approval (a question: "did you mean ...?") instead of running."""
 
     text: str
+    alternatives: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)

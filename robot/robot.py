@@ -419,7 +419,7 @@ class Robot(InProcessPort):
                 world.objects,
                 world.places,
                 self._events.publish,
-                lambda text: self.submit(RunCommand(text)),
+                self.submit,
                 self._events.subscribe,
                 estop=lambda: self.submit(EStop(source="voice")),
             )

@@ -143,6 +143,7 @@ def _transcribe_file(path: str, engine: str | None, seed: int, settings: Setting
         "in_grammar": transcript.in_grammar,
         "audio_s": round(transcript.audio_s, 3),
         "decode_ms": round(transcript.decode_s * 1000, 1),
+        "alternatives": list(transcript.alternatives),
         "stop_word": verdict.stop or is_stop_utterance(transcript.text),
     }
 

@@ -24,6 +24,9 @@ class Transcript:
     in_grammar: bool  # a whole sentence of the command grammar (an engine without one says False)
     audio_s: float
     decode_s: float
+    # Other wordings the engine found nearly as likely, likeliest first (whisper's beam): the planner tries them,
+    # and asks before running one, when it cannot read `text` ("grant me the bottle" for "grab me the bottle").
+    alternatives: tuple[str, ...] = ()
 
     @property
     def sure(self) -> bool:

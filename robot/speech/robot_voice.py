@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from robot.interface import CommandReply, Event, EventSubscription, Level
+from robot.interface import CommandReply, Event, EventSubscription, Level, RunCommand
 from robot.speech.asr import ASRError, SpeechRecognizer, Transcript
 from robot.speech.audio import Audio
 from robot.speech.devices import AudioDevice, find_device
@@ -63,7 +63,7 @@ class RobotVoice:
         objects: dict[str, tuple[str, ...]],
         places: dict[str, tuple[str, ...]],
         publish: Callable[..., Event],
-        run_command: Callable[[str], CommandReply],
+        run_command: Callable[[RunCommand], CommandReply],
         subscribe: Callable[[], EventSubscription],
         input_stream: Callable[..., Any] | None = None,  # sounddevice's streams unless given (tests)
         output_stream: Callable[..., Any] | None = None,
@@ -274,7 +274,7 @@ class RobotVoice:
         if late_stop:
             self._latch(transcript.text, "transcript")
         elif will_run:
-            reply = self._run_command(transcript.text)
+            reply = self._run_command(RunCommand(transcript.text, transcript.alternatives))
             self._publish(
                 "speech/command",
                 reply.message,
@@ -296,6 +296,7 @@ class RobotVoice:
             "engine": transcript.engine,
             "audio_s": round(transcript.audio_s, 3),
             "decode_ms": round(transcript.decode_s * 1000, 1),
+            "alternatives": list(transcript.alternatives),
             "auto_run": transcript.sure,
             "will_run": will_run,
             "source": SOURCE,

@@ -9,11 +9,13 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 from robot.core.safety import SafetyLatch
 from robot.interface import CommandReply, ExecutePlan, Level, Plan, PlanState, Refusal, RunCommand
 from robot.planning.context import ConversationMemory, PlanningContext
+from robot.planning.heard import first_readable
 from robot.planning.pipeline import PlanningPipeline, PlanResult
 from robot.planning.planner import ClarificationNeeded, PlanningError
 from robot.planning.validator import validate_plan_json
@@ -63,7 +65,23 @@ class PlanCommands:
         with self._lock:
             if refusal := self._refusal():
                 return refusal
-        result = self._plan(text, self._context())
+        context = self._context()
+        result = self._plan(text, context)
+        if isinstance(result, CommandReply) and result.clarify is None and command.alternatives:
+            heard = first_readable(self.planning, command.alternatives, context)
+            if heard is not None:
+                wording, planned = heard
+                self._publish(
+                    "plan/heard_as",
+                    f"could not plan {text!r}; planned what was heard next likeliest, {wording!r}: it awaits approval",
+                    Level.OK,
+                    text=text,
+                    heard_as=wording,
+                )
+                reply = self._runner.enqueue(wording, planned.plan, new_command=True, planned=planned, ask=True)
+                if not reply.accepted:
+                    return reply
+                return replace(reply, message=f'did you mean "{wording}"? Approve its plan to run it ({reply.message})')
         if isinstance(result, CommandReply):
             self._memory.add(text)
             self._memory.update_last(outcome=f"refused: {result.message}")

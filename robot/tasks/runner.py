@@ -190,9 +190,11 @@ class TaskRunner:
         planned: PlanResult | None = None,
         approved: bool = False,
         backend: str = "",
+        ask: bool = False,
     ) -> CommandReply:
         """Start a plan (a new command's, or a new revision of the current one), superseding whatever ran or
-        waited; with approval required, a planner's plan waits for the operator instead."""
+        waited; with approval required, a planner's plan waits for the operator instead (and with `ask`, whatever
+        the setting: a plan of a wording the operator did not give)."""
         with self._lock:
             # an e-stop (or teleop) may have come in while planning
             if refusal := self._refusal():
@@ -212,7 +214,7 @@ class TaskRunner:
             if self._current:
                 self._current.cancel.set()  # the newest command or plan revision preempts the running one
             self.drain("superseded by a newer plan")
-            awaits = self._approval_required and not approved
+            awaits = (self._approval_required and not approved) or ask
             status = PlanStatus(
                 plan_id=plan_id,
                 command_id=command_id,

@@ -175,7 +175,11 @@ $("command-form").addEventListener("submit", async (ev) => {
   ev.preventDefault();
   const text = $("command-text").value.trim();
   if (!text) return showResult("type a command first", true);
-  const { ok, data } = await post("/api/commands", { text, source: "typed" });
+  const heardAs = humanoid.heardAs;
+  humanoid.heardAs = null;
+  const spoken = heardAs && heardAs.text === text;  // sent as heard, not edited
+  const body = spoken ? { text, source: "spoken", alternatives: heardAs.alternatives } : { text, source: "typed" };
+  const { ok, data } = await post("/api/commands", body);
   if (!ok && data.detail && data.detail.clarify) return showQuestion(data.detail.clarify);
   showResult(ok ? `accepted: ${data.message}` : describeError(data.detail), !ok);
 });

@@ -29,6 +29,7 @@
     const sure = `confidence ${data.confidence.toFixed(2)}${data.in_grammar ? "" : ", not a known command form"}`;
     if (data.will_run) return heard(`the robot heard "${data.text}" (${sure}): running`, false);
     $("command-text").value = data.text;
+    window.humanoid.heardAs = { text: data.text, alternatives: data.alternatives || [] };
     heard(`the robot heard "${data.text}" (${sure}): press Send to run it, or edit it first`, false);
   };
 
@@ -86,6 +87,8 @@
     if (data.stop_word) return heard(`heard a spoken stop${data.text ? ` ("${data.text}")` : ""}: e-stop latched`, true);
     if (!data.text) return heard("nothing recognised: try again, closer to the microphone", true);
     $("command-text").value = data.text;
+    // the other wordings go with the command while its text is as heard: tried if the text cannot be planned
+    window.humanoid.heardAs = { text: data.text, alternatives: data.alternatives || [] };
     const sure = `confidence ${data.confidence.toFixed(2)}${data.in_grammar ? "" : ", not a known command form"}`;
     if (data.auto_run && $("auto-run").checked) {
       heard(`heard "${data.text}" (${sure}): running`, false);

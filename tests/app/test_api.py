@@ -236,6 +236,20 @@ def _wait_plan(client, predicate, timeout_s: float = 30.0) -> dict:
     raise AssertionError(f"plan state not reached: {client.get('/api/state').json()['plan']}")
 
 
+def test_a_command_sent_with_the_recognisers_other_wordings_asks_before_running_one(client) -> None:
+    heard = {"text": "say hallo wold", "source": "spoken", "alternatives": ["sea hello world", "say hello world"]}
+    unread = {"text": "please grant me the apple", "alternatives": ["please bring me the apple"]}
+    queued = client.post("/api/commands", json=unread)
+    assert queued.status_code == 202 and queued.json()["message"].startswith('did you mean "please bring me the apple"')
+    plan = _wait_plan(client, lambda p: p["state"] == "awaiting_approval")
+    assert plan["command_text"] == "please bring me the apple"
+    assert client.post("/api/plan/cancel").status_code == 200
+    assert client.post("/api/commands", json=heard).status_code == 202  # readable as heard: said, unasked
+    _wait_plan(client, lambda p: p["state"] == "succeeded" and p["command_text"] == "say hallo wold")
+    too_many = {"text": "grant me the apple", "alternatives": ["x"] * 9}
+    assert client.post("/api/commands", json=too_many).status_code == 422
+
+
 def test_plans_can_wait_for_approval_be_approved_paused_and_resumed(client) -> None:
     assert client.put("/api/plan/approval", json={"required": True}).status_code == 200
     # answered once the robot's state says so: what is read next shows the change
@@ -272,7 +286,7 @@ def test_speech_is_transcribed_from_wav_or_raw_pcm_and_bad_audio_is_refused(clie
     wav = synthesize("go to the charging dock", "en-us", 160)
     heard = client.post("/api/speech/transcribe", content=wav, headers={"Content-Type": "audio/wav"}).json()
     assert heard["text"] == "go to the charging dock" and heard["in_grammar"] is True
-    assert set(heard) >= {"confidence", "engine", "audio_s", "decode_ms", "auto_run"}
+    assert set(heard) >= {"confidence", "engine", "audio_s", "decode_ms", "auto_run", "alternatives"}
     pcm = synthesize_audio("find the green apple", "en-us", 160).pcm()
     raw = client.post("/api/speech/transcribe", content=pcm, headers={"Content-Type": "audio/L16; rate=16000"})
     assert raw.json()["text"] == "find the green apple"

@@ -131,3 +131,23 @@ def test_an_estop_with_a_pause_leaves_nothing_to_resume(make_worker) -> None:
     assert worker.submit(ResumePlan()).refusal == Refusal.ESTOP_LATCHED
     worker.submit(ReleaseEStop(source="test"))
     assert worker.submit(ResumePlan()).refusal == Refusal.NOTHING_TO_DO
+
+
+def test_a_misheard_command_asks_before_running_the_next_wording_the_recogniser_heard(make_worker) -> None:
+    worker = make_worker(realtime=False)  # plans run unasked: the one of another wording still asks
+    reply = worker.submit(RunCommand("please grant me the water bottle", ("please bring me the water bottle",)))
+    assert reply.accepted and reply.message.startswith('did you mean "please bring me the water bottle"?'), reply
+    assert worker.wait_for(lambda s: s.plan is not None and s.plan.state == PlanState.AWAITING_APPROVAL, 5.0)
+    plan = worker.state().plan
+    assert plan.command_text == "please bring me the water bottle"
+    assert ("pick_object", "blue bottle") in [(s.action, s.args.get("object")) for s in plan.steps]
+    assert any(e.kind == "plan/heard_as" for e in worker.recent_events())
+    assert worker.submit(CancelPlan()).accepted
+
+    # a wording it can read is planned as heard; one it cannot, with nothing readable beside it, is refused
+    said = worker.submit(RunCommand("say hello", ("say yellow",)))
+    assert said.accepted and "queued" in said.message
+    assert worker.wait_for(succeeded(said.command_id), 10.0)
+    assert worker.state().plan.steps[0].detail == 'said "hello"'
+    refused = worker.submit(RunCommand("bring me a beer", ("bring me a bear", "bring me a pier")))
+    assert not refused.accepted and "unknown object 'beer'" in refused.message

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from robot.events import EventBus
-from robot.interface import CommandReply, Level
+from robot.interface import CommandReply, Level, RunCommand
 from robot.model.world import generate_world
 from robot.planning.world_context import WorldContext
 from robot.speech import devices
@@ -148,8 +148,8 @@ def voice_rig(world, tmp_path):
         FakeInputStream.samples = samples
         FakeOutputStream.written = []
 
-        def run(text: str) -> CommandReply:
-            commands.append(text)
+        def run(command: RunCommand) -> CommandReply:
+            commands.append(command.text)
             return CommandReply(True, "planned", command_id=len(commands))
 
         def estop() -> CommandReply:

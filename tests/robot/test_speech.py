@@ -196,6 +196,42 @@ def test_whisper_is_surer_of_what_it_heard_right_than_of_what_it_did_not(whisper
     assert whisper.transcribe(Audio(np.zeros(RATE, np.int16))).sure is False  # silence runs nothing
 
 
+def test_a_misheard_command_is_read_from_the_next_wording_whisper_heard(whisper) -> None:
+    from bench.spoken import utterance
+    from harness.spoken_cases import Voice
+    from robot.model.world import generate_world
+    from robot.planning.context import PlanningContext
+    from robot.planning.heard import first_readable
+    from robot.planning.pipeline import PlannerConfig, build_pipeline
+    from robot.planning.planner import PlanningError
+    from robot.planning.world_context import WorldContext
+
+    planner = build_pipeline(PlannerConfig(backend="rules"))
+    context = PlanningContext(WorldContext.from_layout(generate_world(0)))
+    # a development-set utterance whisper hears as "That's the coffee cup." (a recording of the bench's, seed 67)
+    heard = whisper.transcribe(utterance("fetch the coffee cup", Voice("en-gb", 175), None, 67))
+    with pytest.raises(PlanningError):
+        planner.plan(heard.text, context)
+    assert heard.alternatives and all(a.lower() != heard.text.lower() for a in heard.alternatives), heard
+    wording, planned = first_readable(planner, heard.alternatives, context)
+    assert "fetch the coffee cup" in wording.lower()
+    assert ("pick_object", "red mug") in [(s.action, s.args.get("object")) for s in planned.plan.steps]
+
+
+def test_whispers_alternatives_are_the_other_wordings_near_the_best_once_each() -> None:
+    from robot.speech.whisper import Hypothesis, alternatives
+
+    beam = [
+        Hypothesis("Take the cup and group it on the counter.", -0.10, -0.1),
+        Hypothesis("Take the cup and glue it on the counter.", -0.32, -0.3),
+        Hypothesis("Take the cup and group it on the counter!", -0.34, -0.3),  # the best again, punctuated
+        Hypothesis("Take the cup and put it on the counter.", -0.38, -0.3),
+        Hypothesis("Take a cop and put it on the counter.", -0.45, -0.4),  # too far below the best
+    ]
+    assert alternatives(beam) == ("Take the cup and glue it on the counter.", "Take the cup and put it on the counter.")
+    assert alternatives(beam[:1]) == () and alternatives([]) == ()
+
+
 @pytest.fixture(scope="module")
 def spotter(world):
     from robot.speech.stop_word import StopSpotter

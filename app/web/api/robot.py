@@ -61,6 +61,12 @@ class CommandIn(BaseModel):
     )
     command_id: int | None = Field(None, ge=1, description="revise this command's plan (with `plan`)")
     source: str = Field("api", max_length=16, pattern=r"^[a-z_]+$")
+    alternatives: list[Annotated[str, Field(max_length=MAX_COMMAND_CHARS)]] = Field(
+        default_factory=list,
+        max_length=8,
+        description="other wordings the recogniser heard (`/api/speech/transcribe`'s `alternatives`): when `text` "
+        "cannot be planned, the first that can is, and its plan awaits approval",
+    )
 
 
 class ApproveIn(BaseModel):
@@ -188,7 +194,7 @@ async def post_command(body: CommandIn, rt: RuntimeDep) -> dict[str, Any]:
     elif body.command_id is not None:
         raise HTTPException(422, detail={"message": "command_id revises a plan: send the edited plan with it"})
     else:
-        command = RunCommand(body.text)
+        command = RunCommand(body.text, tuple(body.alternatives))
     reply = await ask(rt.worker, command, PLANNING_TIMEOUT_S)
     await asyncio.to_thread(rt.recorder.record_command, body.text or "(plan)", body.source, reply, received)
     raise_if_refused(reply)

@@ -110,6 +110,8 @@ async def transcribe(request: Request, rt: RuntimeDep) -> dict[str, Any]:
         "engine": transcript.engine,
         "audio_s": round(transcript.audio_s, 3),
         "decode_ms": round(transcript.decode_s * 1000, 1),
+        # other wordings nearly as likely: sent with the command, tried when the text cannot be planned
+        "alternatives": list(transcript.alternatives),
         # the page runs it without asking when its operator allows that and the recogniser is this sure
         "auto_run": transcript.sure and latched is None,
         "stop_word": latched is not None,
