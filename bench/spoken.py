@@ -36,7 +36,7 @@ from robot.speech.audio import RATE, Audio, add_noise
 from robot.speech.devices import AudioDevice
 from robot.speech.engines import build_recognizer
 from robot.speech.robot_voice import RobotVoice, VoiceConfig
-from robot.speech.stop_word import StopSpotter, is_stop_utterance
+from robot.speech.stop_word import StopSpotter, transcript_is_stop
 from robot.speech.tts import synthesize_audio
 
 NOISY_SNR_DB = 10.0
@@ -186,7 +186,7 @@ def run_set(
                             plan_ms,
                             verdict.decode_s * 1000,
                             verdict.stop,
-                            is_stop_utterance(transcript.text),
+                            transcript_is_stop(transcript),
                             asked,
                         )
                     )

@@ -128,7 +128,7 @@ def _transcribe_file(path: str, engine: str | None, seed: int, settings: Setting
     from robot.planning.world_context import WorldContext
     from robot.speech.audio import read_audio
     from robot.speech.engines import build_recognizer
-    from robot.speech.stop_word import StopSpotter, is_stop_utterance
+    from robot.speech.stop_word import StopSpotter, transcript_is_stop
 
     world = WorldContext.from_layout(generate_world(seed))
     audio = read_audio(path)
@@ -144,7 +144,7 @@ def _transcribe_file(path: str, engine: str | None, seed: int, settings: Setting
         "audio_s": round(transcript.audio_s, 3),
         "decode_ms": round(transcript.decode_s * 1000, 1),
         "alternatives": list(transcript.alternatives),
-        "stop_word": verdict.stop or is_stop_utterance(transcript.text),
+        "stop_word": verdict.stop or transcript_is_stop(transcript),
     }
 
 

@@ -35,7 +35,7 @@ from robot.speech.devices import AudioDevice, find_device
 from robot.speech.microphone import Microphone
 from robot.speech.recognizer_process import RecognizerProcess
 from robot.speech.speaker import Speaker
-from robot.speech.stop_word import StopVerdict, is_stop_utterance
+from robot.speech.stop_word import StopVerdict, transcript_is_stop
 
 log = logging.getLogger(__name__)
 
@@ -260,7 +260,7 @@ class RobotVoice:
             return
         if not transcript.text:
             return  # a noise, a cough: nothing to show or keep
-        late_stop = self.spoken_stop and not spotted_stop and is_stop_utterance(transcript.text)
+        late_stop = self.spoken_stop and not spotted_stop and transcript_is_stop(transcript)
         stop = spotted_stop or late_stop
         will_run = transcript.sure and self.config.auto_run and not stop
         heard = {**self._heard_data(transcript, audio, will_run), "stop": stop}

@@ -299,6 +299,19 @@ def test_a_transcript_is_a_stop_when_its_words_are_a_stop_phrase_with_a_few_more
         assert not is_stop_utterance(text), text
 
 
+def test_a_stop_heard_as_the_recognisers_second_wording_is_still_a_stop() -> None:
+    from robot.speech.asr import Transcript
+    from robot.speech.stop_word import transcript_is_stop
+
+    def heard(text: str, *others: str) -> Transcript:
+        return Transcript(text, 0.6, "whisper", False, 1.0, 0.1, others)
+
+    assert transcript_is_stop(heard("Head stop!", "Head top.", "Hey, stop!"))
+    assert transcript_is_stop(heard("Stop!"))
+    assert not transcript_is_stop(heard("Head to the dock.", "Head to the dock and stop there."))
+    assert not transcript_is_stop(heard("Go to the top.", "Go to the stop."))
+
+
 def test_whispers_prompt_names_every_thing_and_place_and_the_longer_names_people_use(world) -> None:
     from robot.speech.whisper import world_prompt
 

@@ -20,7 +20,7 @@ from robot.planning.world_context import WorldContext
 from robot.speech.asr import ASRError
 from robot.speech.audio import AudioError, from_pcm16, read_wav_bytes
 from robot.speech.recognizer_process import RecognizerGone, RecognizerProcess
-from robot.speech.stop_word import is_stop_utterance
+from robot.speech.stop_word import transcript_is_stop
 from robot.speech.tts import MAX_TEXT_CHARS, TTSError, synthesize
 
 log = logging.getLogger(__name__)
@@ -101,7 +101,7 @@ async def transcribe(request: Request, rt: RuntimeDep) -> dict[str, Any]:
         log.error("speech recognition failed: %s", exc)
         rt.recorder.record_transcript(_unheard(audio.duration_s, rt.settings.asr_engine), "browser", path)
         raise HTTPException(503, detail={"message": f"speech recognition failed: {exc}"}) from exc
-    if latched is None and rt.settings.spoken_stop and is_stop_utterance(transcript.text):
+    if latched is None and rt.settings.spoken_stop and transcript_is_stop(transcript):
         latched = await _latch(rt)
     heard = {
         "text": transcript.text,
