@@ -104,7 +104,7 @@ class NoRoom(StepFailed):
 
 def make_room(parts: BodyParts, sweep: Sweep, turn: Callable[[float], None] | None, what: str) -> str:
     """Clear floor on the lidar's map where the arm will sweep: turned in place to find it if `turn` is given;
-    `StepFailed` when there is none. What was done, for the gesture's report ("" when nothing was needed)."""
+    `NoRoom` when there is none. What was done, for the gesture's report ("" when nothing was needed)."""
     perception = parts.perception
     grid = perception.feed().map if perception is not None else None
     if grid is None:

@@ -68,25 +68,35 @@ class PlanCommands:
         context = self._context()
         result = self._plan(text, context)
         if isinstance(result, CommandReply) and result.clarify is None and command.alternatives:
-            heard = first_readable(self.planning, command.alternatives, context)
-            if heard is not None:
-                wording, planned = heard
-                self._publish(
-                    "plan/heard_as",
-                    f"could not plan {text!r}; planned what was heard next likeliest, {wording!r}: it awaits approval",
-                    Level.OK,
-                    text=text,
-                    heard_as=wording,
-                )
-                reply = self._runner.enqueue(wording, planned.plan, new_command=True, planned=planned, ask=True)
-                if not reply.accepted:
-                    return reply
-                return replace(reply, message=f'did you mean "{wording}"? Approve its plan to run it ({reply.message})')
+            asked = self._ask_about_alternative(text, command.alternatives, context)
+            if asked is not None:
+                return asked
         if isinstance(result, CommandReply):
             self._memory.add(text)
             self._memory.update_last(outcome=f"refused: {result.message}")
             return result
         return self._runner.enqueue(text, result.plan, new_command=True, planned=result)
+
+    def _ask_about_alternative(
+        self, text: str, alternatives: tuple[str, ...], context: PlanningContext
+    ) -> CommandReply | None:
+        """`text` could not be planned: the plan of the first readable other wording the recogniser heard, waiting
+        for the operator's approval ("did you mean ...?"); None when none is readable."""
+        heard = first_readable(self.planning, alternatives, context)
+        if heard is None:
+            return None
+        wording, planned = heard
+        self._publish(
+            "plan/heard_as",
+            f"could not plan {text!r}; planned what was heard next likeliest, {wording!r}: it awaits approval",
+            Level.OK,
+            text=text,
+            heard_as=wording,
+        )
+        reply = self._runner.enqueue(wording, planned.plan, new_command=True, planned=planned, ask=True)
+        if not reply.accepted:
+            return reply
+        return replace(reply, message=f'did you mean "{wording}"? Approve its plan to run it ({reply.message})')
 
     def execute_plan(self, command: ExecutePlan) -> CommandReply:
         with self._lock:
