@@ -82,6 +82,29 @@ def test_typed_command_runs_and_the_plan_shows_per_step_status(page) -> None:
     expect(page.locator("#command-result")).to_have_class("result question")
 
 
+def test_a_misheard_command_is_asked_about_and_runs_once_approved(page) -> None:
+    """The page sends what it heard with the recogniser's other wordings (as after push-to-talk); the robot plans
+    the first readable one and asks. An edited command goes without them."""
+    expect = playwright_api.expect
+    heard = {"text": "sail hello there", "alternatives": ["sail hello dare", "say hello there"]}
+    page.evaluate(
+        "heard => { document.getElementById('command-text').value = heard.text; humanoid.heardAs = heard; }", heard
+    )
+    page.click("#send")
+    expect(page.locator("#command-result")).to_contain_text('did you mean "say hello there"?')
+    expect(page.locator("#plan-state")).to_have_text("awaiting approval", timeout=10_000)
+    page.click("#approve")
+    expect(page.locator("#plan-state")).to_have_text("succeeded", timeout=10_000)
+    expect(page.locator("#plan-steps li").first).to_contain_text('said "hello there"')
+
+    page.evaluate(
+        "heard => { document.getElementById('command-text').value = heard.text; humanoid.heardAs = heard; }", heard
+    )
+    page.fill("#command-text", "sail hello everyone")  # edited before sending: only what was typed is planned
+    page.click("#send")
+    expect(page.locator("#command-result")).to_have_class("result error")
+
+
 def test_an_operator_approves_edits_and_pauses_plans_from_the_page(page) -> None:
     expect = playwright_api.expect
     expect(page.locator("#planner")).to_contain_text("planner: rules")
