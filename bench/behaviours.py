@@ -9,8 +9,9 @@ the simulator's truth rather than by what the behaviour says.
 - tour: the places presented of all the places (a stop counts when the robot stood within `PRESENTED_M` of the
   place's approach as it said its sentence).
 - fetch: an object not in the camera's view at the start, brought to where the robot started: held in the hand
-  at the end (it touches the robot and nothing else: a bottle gripped by its side has its centre 6 cm from the
-  hand, so a distance cannot tell), the robot within `DELIVERED_M` of its start.
+  at the end (it touches the robot and nothing else, or its centre is within `HELD_M` of the hand: a bottle
+  gripped by its side has its centre 6.4 cm from the hand; an apple in the hand once showed no contact at the
+  moment of judging), the robot within `DELIVERED_M` of its start.
 - demo: every gesture performed, a typed command answered between them, without a fall.
 
 Bars (issue 37): >= 10 seeds each; patrol >= 95 % of waypoints, 0 falls, 0 collisions; tour >= 90 % complete;
@@ -33,6 +34,7 @@ REACHED_M = 0.25  # within this of a waypoint (its open-floor point), the robot 
 AWAY_M = 0.6  # ... and once this far from it again, a later pass is a new visit
 PRESENTED_M = 0.35
 DELIVERED_M = 0.35
+HELD_M = 0.06  # the object's centre this close to the hand: held
 DEMO_COMMAND = "what can you do"
 FOOT_BODIES = ("l_ank_roll_link", "r_ank_roll_link")
 GROUND_GEOMS = ("floor", "charging_dock")
@@ -206,7 +208,9 @@ def _truth(
         from robot.model.scene import object_body_name
 
         obj = result["params"].get("object", "")
-        held = judge.in_hand(object_body_name(obj))
+        position = np.array(backend.data.body(object_body_name(obj)).xpos, dtype=float)
+        near_hand = float(np.linalg.norm(position - np.array(backend.data.site("right_hand").xpos))) < HELD_M
+        held = judge.in_hand(object_body_name(obj)) or near_hand
         base = np.array(backend.data.qpos[:2], dtype=float)
         home = math.dist(tuple(base), layout.robot_start[:2]) < DELIVERED_M
         return {"ok": held and home, "held_at_end": held, "at_start": home, "object": obj}
