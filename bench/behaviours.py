@@ -23,95 +23,19 @@ from __future__ import annotations
 import math
 import tempfile
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from harness.behaviour_judge import Judge
+
 BEHAVIOURS = ("patrol", "tour", "fetch", "demo")
 BARS = {"patrol": 0.95, "tour": 0.90, "fetch": 0.85, "demo": 1.0}
-REACHED_M = 0.25  # within this of a waypoint (its open-floor point), the robot was there
-AWAY_M = 0.6  # ... and once this far from it again, a later pass is a new visit
 PRESENTED_M = 0.35
 DELIVERED_M = 0.35
 HELD_M = 0.06  # the object's centre this close to the hand: held
 DEMO_COMMAND = "what can you do"
-FOOT_BODIES = ("l_ank_roll_link", "r_ank_roll_link")
-GROUND_GEOMS = ("floor", "charging_dock")
 TIMEOUT_S = 1800.0
-
-
-@dataclass
-class Judge:
-    """Watches the simulation while a behaviour runs: contacts, visits to points."""
-
-    backend: Any
-    points: dict[str, tuple[float, float]] = field(default_factory=dict)
-    visits: dict[str, int] = field(default_factory=dict)
-    near: dict[str, bool] = field(default_factory=dict)
-    collisions: list[dict[str, Any]] = field(default_factory=list)  # what touched what, first at (sim s)
-
-    def __post_init__(self) -> None:
-        import mujoco
-
-        model = self.backend.model
-        roots = model.body_rootid
-        robot_root = int(roots[model.body("body_link").id])
-        self._robot = {g for g in range(model.ngeom) if int(roots[model.geom_bodyid[g]]) == robot_root}
-        feet = {model.body(name).id for name in FOOT_BODIES}
-        self._feet = {g for g in self._robot if int(model.geom_bodyid[g]) in feet}
-        self._ground = {mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, n) for n in GROUND_GEOMS}
-
-    def watch(self, state: Any) -> None:
-        self._contacts(state.held_object, state.sim_time_s)
-        x, y = state.base_position[:2]
-        for name, point in self.points.items():
-            distance = math.dist((x, y), point)
-            if distance < REACHED_M and not self.near.get(name, False):
-                self.near[name] = True
-                self.visits[name] = self.visits.get(name, 0) + 1
-            elif distance > AWAY_M:
-                self.near[name] = False
-
-    def in_hand(self, body_name: str) -> bool:
-        """The body touches the robot and nothing else: held off the floor and the furniture."""
-        model, data = self.backend.model, self.backend.data
-        body = model.body(body_name).id
-        robot = other = False
-        for a, b in _contact_pairs(data):
-            for mine, theirs in ((a, b), (b, a)):
-                if int(model.geom_bodyid[mine]) == body:
-                    robot |= theirs in self._robot
-                    other |= theirs not in self._robot
-        return robot and not other
-
-    def _contacts(self, held: str | None, sim_time_s: float) -> None:
-        """The contacts now (read beside the control thread stepping the simulation: a copy, taken whole or not)."""
-        model, data = self.backend.model, self.backend.data
-        for a, b in _contact_pairs(data):
-            if (a in self._robot) == (b in self._robot):
-                continue  # the robot with itself, or the world with itself
-            mine, other = (a, b) if a in self._robot else (b, a)
-            if mine in self._feet and other in self._ground:
-                continue
-            body = model.body(int(model.body_rootid[model.geom_bodyid[other]])).name
-            if held is not None and body == "obj_" + held.replace(" ", "_"):
-                continue
-            what = model.geom(int(other)).name or body
-            touched = f"{model.body(int(model.geom_bodyid[mine])).name} with {what}"
-            if not any(c["what"] == touched for c in self.collisions):
-                self.collisions.append({"what": touched, "sim_s": round(sim_time_s, 2)})
-
-
-def _contact_pairs(data: Any) -> np.ndarray:
-    """The geom pairs in contact now, read beside the control thread stepping the simulation: a copy, taken whole
-    (a read torn by a step is taken again)."""
-    for _ in range(10):
-        try:
-            return np.array(data.contact.geom, dtype=int).reshape(-1, 2)
-        except (IndexError, ValueError):
-            continue
-    return np.zeros((0, 2), dtype=int)
 
 
 def run_one(behaviour: str, seed: int) -> dict[str, Any]:

@@ -22,7 +22,7 @@ import numpy as np
 
 from harness.planner_cases import Case, context_for, plan_matches
 from harness.speech_trials import ReplayStream, trim, word_errors
-from harness.spoken_cases import SETS, SpokenSet, Voice
+from harness.spoken_cases import ROOM_SNR_DB, SETS, SpokenSet, utterance
 from robot.events import EventBus
 from robot.interface import CommandReply
 from robot.model.world import generate_world
@@ -40,8 +40,6 @@ from robot.speech.stop_word import StopSpotter, transcript_is_stop
 from robot.speech.tts import synthesize_audio
 
 NOISY_SNR_DB = 10.0
-ROOM_SNR_DB = 40.0
-LEAD_S, TAIL_S = 0.4, 0.3
 BARS = {
     "plan_right_clean": 0.90,
     "plan_right_noisy": 0.80,
@@ -72,17 +70,6 @@ def wer_words(text: str) -> str:
     words = normalize(text.replace("-", " ")).split()
     words = [NUMBERS.get(w, "okay" if w == "ok" else w) for w in words]
     return " ".join(w for w in words if w not in FILLERS)
-
-
-def utterance(text: str, voice: Voice, snr_db: float | None, seed: int) -> Audio:
-    """The sentence spoken, with the quiet before and after it, clean (a quiet room) or in brown noise."""
-    spoken = synthesize_audio(text, voice.name, voice.wpm, voice.pitch).samples
-    padded = Audio(
-        np.concatenate([np.zeros(int(LEAD_S * RATE), np.int16), spoken, np.zeros(int(TAIL_S * RATE), np.int16)])
-    )
-    if snr_db is None:
-        return add_noise(padded, ROOM_SNR_DB, seed=seed)
-    return add_noise(padded, snr_db, seed=seed, colour="brown")
 
 
 @dataclass

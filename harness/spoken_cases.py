@@ -16,6 +16,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from harness.planner_cases import (
     APPLE,
     BOTTLE,
@@ -33,6 +35,8 @@ from harness.planner_cases import (
     go,
     seq,
 )
+from robot.speech.audio import RATE, Audio, add_noise
+from robot.speech.tts import synthesize_audio
 
 
 def say(text: str) -> Seed:
@@ -283,3 +287,18 @@ HELDOUT2 = SpokenSet(
 )
 
 SETS: dict[str, SpokenSet] = {s.name: s for s in (DEV, HELDOUT, HELDOUT2)}
+
+
+ROOM_SNR_DB = 40.0  # a quiet room
+LEAD_S, TAIL_S = 0.4, 0.3  # quiet before and after the words, as a push-to-talk recording has
+
+
+def utterance(text: str, voice: Voice, snr_db: float | None, seed: int) -> Audio:
+    """A set's sentence spoken, with the quiet before and after it, clean (a quiet room) or in brown noise."""
+    spoken = synthesize_audio(text, voice.name, voice.wpm, voice.pitch).samples
+    padded = Audio(
+        np.concatenate([np.zeros(int(LEAD_S * RATE), np.int16), spoken, np.zeros(int(TAIL_S * RATE), np.int16)])
+    )
+    if snr_db is None:
+        return add_noise(padded, ROOM_SNR_DB, seed=seed)
+    return add_noise(padded, snr_db, seed=seed, colour="brown")

@@ -32,7 +32,9 @@ def test_the_speech_bench_reports_word_errors_plans_and_stops_per_engine_and_tim
     for engine in ("whisper", "pocketsphinx"):
         figures = result["sets"]["dev"][engine]
         assert figures["clean"]["utterances"] == 2 and figures["clean"]["wer"] is not None
-        assert figures["stop"]["stop_utterances"] == 1 and figures["stop"]["ordinary_commands"] == 2
+        # a command, a command with "stop" in it and a request out of the world: three that must not stop the robot
+        assert figures["stop"]["stop_utterances"] == 1 and figures["stop"]["ordinary_commands"] == 3
+        assert figures["out_of_world"]["utterances"] == 1
         assert figures["confidence"]["threshold"] == 0.7
     assert result["sets"]["dev"]["whisper"]["stop"]["false_stops"] == 0  # "go to the dock and stop there": no stop
     stops = result["robot_microphone_stop"]

@@ -55,14 +55,15 @@ def test_pointing_lower_reaches_less_far_ahead() -> None:
 
 
 def test_the_demo_beside_a_plant_turns_before_waving_and_never_touches_it() -> None:
-    from bench.behaviours import run_one
+    from harness.behaviour_judge import run_judged
+    from robot.interface import BehaviourState
 
     layout = generate_world(0)
     plant = next(o for o in layout.obstacles if o.name.startswith("plant"))
     start = layout.robot_start
     assert math.dist((plant.x, plant.y), start[:2]) < 0.55  # the world this test is about: a plant at arm's length
-    result = run_one("demo", 0)
-    touched = [c["what"] for c in result["collisions"] if plant.name in c["what"]]
-    assert touched == [] and result["fell"] is False
-    assert result["success"] is True, result["reason"]
-    assert any(line.startswith("greeted with a wave (turned") for line in result["feedback"])
+    status, judge = run_judged("demo", {"listen_s": 1.0}, 0)
+    touched = [c["what"] for c in judge.collisions if plant.name in c["what"]]
+    assert touched == [] and status is not None
+    assert status.state == BehaviourState.SUCCEEDED, status.reason
+    assert any(line.startswith("greeted with a wave (turned") for line in status.feedback)

@@ -197,8 +197,7 @@ def test_whisper_is_surer_of_what_it_heard_right_than_of_what_it_did_not(whisper
 
 
 def test_a_misheard_command_is_read_from_the_next_wording_whisper_heard(whisper) -> None:
-    from bench.spoken import utterance
-    from harness.spoken_cases import Voice
+    from harness.spoken_cases import Voice, utterance
     from robot.model.world import generate_world
     from robot.planning.context import PlanningContext
     from robot.planning.heard import first_readable

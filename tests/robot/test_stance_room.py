@@ -41,10 +41,12 @@ def test_with_no_free_stance_in_reach_the_stance_stays_taken_for_the_caller_to_r
 
 
 def test_a_fetch_with_a_chair_where_it_must_stand_gives_up_at_once_without_pushing_it() -> None:
-    from bench.behaviours import run_one
+    from harness.behaviour_judge import run_judged
+    from robot.interface import BehaviourState
 
-    result = run_one("fetch", 0)
-    assert result["object"] == "green apple" and result["fell"] is False
-    assert result["success"] is False and result["reason"].startswith("no room to stand where the hand reaches")
-    assert not [c for c in result["collisions"] if "chair" in c["what"]]
-    assert result["sim_s"] < 30.0  # it did not try for long (simulated time: not a timing of this machine)
+    status, judge = run_judged("fetch", {"object": "green apple"}, 0)
+    assert status is not None and status.state == BehaviourState.FAILED
+    assert status.reason.startswith("no room to stand where the hand reaches the green apple"), status.reason
+    assert not [c for c in judge.collisions if "chair" in c["what"]]
+    # it did not try for long (simulated time, not a timing of this machine)
+    assert status.ended_sim_s is not None and status.ended_sim_s - status.started_sim_s < 30.0
