@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from robot.planning.world_context import normalize
 from robot.speech.asr import ASRError, Transcript
 from robot.speech.audio import Audio
 
@@ -209,18 +210,14 @@ def alternatives(hypotheses: list[Hypothesis], margin: float = ALTERNATIVE_MARGI
     if not hypotheses:
         return ()
     best = hypotheses[0].score
-    seen = {_words(hypotheses[0].text)}
+    seen = {normalize(hypotheses[0].text)}
     kept = []
     for hypothesis in hypotheses[1:]:
-        words = _words(hypothesis.text)
+        words = normalize(hypothesis.text)
         if best - hypothesis.score <= margin and words and words not in seen:
             seen.add(words)
             kept.append(hypothesis.text)
     return tuple(kept)
-
-
-def _words(text: str) -> str:
-    return " ".join("".join(c for c in text.lower() if c.isalnum() or c in " '").split())
 
 
 def whisper_confidence(avg_logprobs: list[float]) -> float:
