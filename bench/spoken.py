@@ -364,7 +364,7 @@ COMMAND_KINDS = ("command", "with_stop")  # utterances with a plan to give
 
 
 def run_speech(
-    sets: tuple[str, ...] = ("dev", "heldout", "heldout2"),
+    sets: tuple[str, ...] = ("dev", "heldout", "heldout2", "heldout3"),
     engines: tuple[str, ...] = ("whisper", "pocketsphinx"),
     robot_microphone: bool = True,
     quick: bool = False,

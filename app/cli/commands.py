@@ -567,7 +567,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--no-fallback", action="store_true", help="planner, language: judge an LLM backend alone (no rules fallback)"
     )
     bench.add_argument(
-        "--sets", default="dev,heldout,heldout2", help="speech: spoken sets (dev, heldout, heldout2), comma-separated"
+        "--sets",
+        default="dev,heldout,heldout2,heldout3",
+        help="speech: spoken sets (dev, heldout, heldout2, heldout3), comma-separated",
     )
     bench.add_argument(
         "--engines", default="whisper,pocketsphinx", help="speech: recognisers (whisper, pocketsphinx), comma-separated"

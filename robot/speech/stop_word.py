@@ -43,6 +43,7 @@ KWS_THRESHOLDS = {"stop": 1e-40, "halt": 1e-35, "freeze": 1e-25, "robot stop": 1
 MAX_STOP_UTTERANCE_S = 3.5  # longer is no stop "with a few words" (with the quiet around it a recording keeps)
 _BEFORE = r"(?:hey|okay|ok|robot|please|now)"
 _AFTER = r"(?:now|right now|please|it|everything|moving|robot|then)"
+_CLAUSE_BREAK = re.compile(r"[,;:.!?]+")
 _STOP_UTTERANCE = re.compile(rf"^(?:{_BEFORE} )*(?:{'|'.join(STOP_PHRASES)})(?: (?:stop|halt|freeze))*(?: {_AFTER})*$")
 
 
@@ -51,12 +52,22 @@ def is_stop_utterance(text: str) -> bool:
     return bool(_STOP_UTTERANCE.match(" ".join(normalize(text).split())))
 
 
+def ends_with_stop(text: str) -> bool:
+    """The words are a stop utterance, or their last clause (after a comma or a sentence's end) is one: "Okay, move
+    on, stop!" is someone saying stop after a few words the recogniser did not catch. A stop said last, as a clause of
+    its own, is the one to obey; "go to the dock and stop there" and "walk to the counter, then stop" stay commands."""
+    if is_stop_utterance(text):
+        return True
+    clauses = [c for c in _CLAUSE_BREAK.split(text) if normalize(c).strip()]
+    return len(clauses) > 1 and is_stop_utterance(clauses[-1])
+
+
 def transcript_is_stop(transcript: Transcript) -> bool:
-    """The transcript, or one of the other wordings the recogniser heard nearly as likely, is a stop utterance.
-    Whisper hears a spoken stop in an unusual voice as "Head stop!" with "Hey, stop!" next, or "Immersion should
-    stop right now." with "Emergency stop right now." next: the other wordings added 5 of 96 stops on the development
-    set and 6 on the first held-out set, and no false stop on their 512 ordinary commands."""
-    return is_stop_utterance(transcript.text) or any(is_stop_utterance(a) for a in transcript.alternatives)
+    """The transcript, or one of the other wordings the recogniser heard nearly as likely, is a stop utterance or
+    ends with one. Whisper hears a spoken stop in an unusual voice as "Head stop!" with "Hey, stop!" next, or
+    "Immersion should stop right now." with "Emergency stop right now." next: the other wordings added 5 of 96 stops
+    on the development set and 6 on the first held-out set, and no false stop on their 512 ordinary commands."""
+    return ends_with_stop(transcript.text) or any(ends_with_stop(a) for a in transcript.alternatives)
 
 
 @dataclass(frozen=True)

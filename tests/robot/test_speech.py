@@ -311,6 +311,27 @@ def test_a_stop_heard_as_the_recognisers_second_wording_is_still_a_stop() -> Non
     assert not transcript_is_stop(heard("Go to the top.", "Go to the stop."))
 
 
+def test_a_transcript_ending_in_a_stop_clause_is_a_stop_and_a_command_that_stops_somewhere_is_not() -> None:
+    from robot.speech.asr import Transcript
+    from robot.speech.stop_word import transcript_is_stop
+
+    def heard(text: str, *others: str) -> Transcript:
+        return Transcript(text, 0.6, "whisper", False, 1.0, 0.1, others)
+
+    for text in ("Okay, move on, stop!", "No, no, stop.", "Wait. Stop right now!", "Walk to the counter. Stop."):
+        assert transcript_is_stop(heard(text)), text
+    assert transcript_is_stop(heard("Okay, move, not stop.", "Okay, move. Stop!"))
+    for text in (
+        "Walk to the counter, then stop.",
+        "Go to the table, stop in front of it.",
+        "Stop, bite my kitchen and get to the mug.",
+        "Fetch the bottle, don't stop on the way.",
+        "Go to the dock and stop there.",
+        "Okay, move on.",
+    ):
+        assert not transcript_is_stop(heard(text)), text
+
+
 def test_whispers_prompt_names_every_thing_and_place_and_the_longer_names_people_use(world) -> None:
     from robot.speech.whisper import world_prompt
 

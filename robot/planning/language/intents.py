@@ -296,8 +296,15 @@ def _shapes() -> tuple[tuple[re.Pattern[str], Build], ...]:
             r"where (?:did|has|have|does) (?P<thing>.+?) (?:go|gone|went|get to|got to|end up|ended up|disappear to)",
             _find,
         ),
+        # "where did I leave the bottle", "where have you put my mug"
         (
-            r"(?:where is|where are|where|where did you put|where can i find) (?P<thing>.+?)"
+            r"where (?:did|have|had|do) (?:i|you|we|they|he|she|someone|somebody|anyone|anybody)(?: last)? "
+            r"(?:leave|left|put|see|seen|saw|drop|dropped|place|placed|move|moved|set|hide|hid|hidden|keep|kept) "
+            r"(?P<thing>.+?)(?: (?:now|last|at the moment|earlier|today|yesterday))?",
+            _find,
+        ),
+        (
+            r"(?:where is|where are|where can i find|where) (?P<thing>.+?)"
             r"(?: (?:now|at the moment|right now|gone|go|at))?",
             _find,
         ),

@@ -66,14 +66,16 @@ FILLER_PREFIXES = word_list("""
     would it be possible to, would it be possible for you to, is it possible for you to, is it possible to,
     could the robot, help me, can you help me, could you help me, let us, i think, i guess, i suppose, pls,
     plz, about, what about, how about, no, i meant, i mean, mind, whoa, woah, oops, ah, oh no, off you go,
-    on you go,
+    on you go, it is time to, time to, now it is time to, it is time for you to,
     once done, when that is done, when finished""")
 FILLER_SUFFIXES = word_list("""
     if you do not mind, when you get a chance, when you can, if you can, if you could, thank you very much,
     thanks a lot, thank you, thanks, cheers, please, for me, for us, right now, right away, immediately, at once,
     quickly, now, robot, buddy, mate, pal, would you, will you, could you, ok, okay, first, too, as well, and then,
     and, then, if possible, if you would, yeah, pls, plz, without stopping, without a stop, without pausing,
-    without a break, non stop, nonstop, in one go""")
+    without a break, non stop, nonstop, in one go, without stopping on the way, without stopping anywhere,
+    do not stop, do not stop for anything, do not stop on the way, do not stop along the way, do not stop anywhere,
+    and do not stop, no stopping, no stops""")
 # said anywhere in a request without changing it ("bring the mug for me to the table")
 FILLER_INFIXES = word_list("please, for me, for us, kindly")
 # what joins two steps said one after the other
