@@ -131,6 +131,7 @@ def _transcripts(db: Session, sid: int, audio_dir: str | None) -> Iterator[dict[
             "in_grammar": t.in_grammar,
             "audio_s": t.audio_s,
             "decode_ms": t.decode_ms,
+            "alternatives": list(t.alternatives or []),
             "audio_wav_base64": base64.b64encode(wav.read_bytes()).decode() if wav else None,
         }
 
@@ -284,6 +285,7 @@ def import_session(factory: sessionmaker, doc: dict[str, Any], audio_dir: str) -
                         audio_s=t["audio_s"],
                         decode_ms=t["decode_ms"],
                         audio_path=path,
+                        alternatives=list(t.get("alternatives") or []),  # (archives before stop 59 have none)
                     )
                 )
             for p in doc["plans"]:

@@ -263,7 +263,8 @@ def _side_messages(
         t_ns = timeline.ns(clock.sim_at(c.received_at))
         yield log_line(t_ns, 0 if c.accepted else 1, f"command/{c.source}", f'"{c.text}" {verdict}')
     for t in db.scalars(select(TranscriptRow).where(TranscriptRow.session_id == sid).order_by(TranscriptRow.id)):
-        heard = f'heard "{t.text}" (confidence {t.confidence:.2f}, {t.engine})'
+        also = "".join(f', or "{a}"' for a in t.alternatives or [])
+        heard = f'heard "{t.text}"{also} (confidence {t.confidence:.2f}, {t.engine})'
         yield log_line(timeline.ns(clock.sim_at(t.received_at)), 0, f"speech/{t.source}", heard)
     yield from _plans(db, sid, channels, timeline, clock, counter)
     for f in db.scalars(select(CameraFrameRow).where(CameraFrameRow.session_id == sid).order_by(CameraFrameRow.id)):

@@ -121,8 +121,8 @@ class BehaviourRunRow(Base):
 
 
 class TranscriptRow(Base):
-    """What was heard: the transcript, how sure the recogniser was, and the recording (a WAV under the audio
-    directory, by a path relative to it)."""
+    """What was heard: the transcript, how sure the recogniser was, its other wordings, and the recording (a WAV
+    under the audio directory, by a path relative to it)."""
 
     __tablename__ = "transcripts"
 
@@ -137,6 +137,8 @@ class TranscriptRow(Base):
     audio_s: Mapped[float] = mapped_column(Float)
     decode_ms: Mapped[float] = mapped_column(Float)
     audio_path: Mapped[str | None] = mapped_column(String(512))
+    # the recogniser's other wordings, nearly as likely (whisper's beam): what the robot asked "did you mean ...?" of
+    alternatives: Mapped[list[str] | None] = mapped_column(JSON)
 
 
 class TelemetryChunkRow(Base):

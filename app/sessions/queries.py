@@ -214,6 +214,7 @@ def session_detail(db: Session, session_id: int) -> dict[str, Any] | None:
             "in_grammar": t.in_grammar,
             "audio_s": t.audio_s,
             "decode_ms": t.decode_ms,
+            "alternatives": list(t.alternatives or []),
             "audio_url": f"/api/sessions/{session_id}/transcripts/{t.id}/audio.wav" if t.audio_path else None,
         }
         for t in transcripts
@@ -290,13 +291,14 @@ def build_timeline(
             }
         )
     for t in transcripts:
+        also = "".join(f', or "{a}"' for a in t["alternatives"])
         items.append(
             {
                 "type": "heard",
                 "at": t["received_at"],
                 "sim_time_s": t["sim_time_s"],
                 "level": 0,
-                "text": f'heard "{t["text"]}" (confidence {t["confidence"]:.2f}, {t["source"]})',
+                "text": f'heard "{t["text"]}"{also} (confidence {t["confidence"]:.2f}, {t["source"]})',
                 "audio_url": t["audio_url"],
             }
         )

@@ -221,6 +221,7 @@ class SessionRecorder:
             audio_s=heard["audio_s"],
             decode_ms=heard["decode_ms"],
             audio_path=audio_path,
+            alternatives=[str(a) for a in heard.get("alternatives") or []],
         )
 
     def close(self, outcome: str | None = None, summary: dict[str, Any] | None = None) -> None:

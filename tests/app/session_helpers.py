@@ -19,6 +19,7 @@ def record_session(factory, worker, audio_dir: str, estop: bool = True) -> int:
         "in_grammar": True,
         "audio_s": 1.2,
         "decode_ms": 40.0,
+        "alternatives": ["say hollow"],  # the recogniser's other wording, nearly as likely
     }
     recorder.record_transcript(heard, "cli", save_recording(audio_dir, recorder.session_id, wav))
     reply = worker.submit(RunCommand("say hello"))

@@ -55,6 +55,8 @@ def test_a_session_records_motion_at_30_hz_of_simulated_time_and_what_happened(r
     assert "refused" in refused["text"]
     heard = next(i for i in detail["timeline"] if i["type"] == "heard")
     assert heard["audio_url"].endswith("/audio.wav")
+    assert heard["text"].startswith('heard "say hello", or "say hollow"')  # the other wording is kept too
+    assert detail["transcripts"][0]["alternatives"] == ["say hollow"]
     times = [i["sim_time_s"] for i in detail["timeline"]]
     # in time order (to the centisecond: a command comes before the plan made of it at the same moment)
     assert all(b >= a - 0.01 for a, b in itertools.pairwise(times))
@@ -202,6 +204,7 @@ def check_json_round_trip(factory, audio_dir: str, sid: int, tmp_path: Path) -> 
     assert ta.shape == tb.shape and ta.shape[0] > 30
     assert np.allclose(ta, tb, equal_nan=True, rtol=1e-6)
     assert a["transcripts"][0]["audio_wav_base64"]  # the recording travels with it
+    assert a["transcripts"][0]["alternatives"] == ["say hollow"]
     with factory() as db:
         assert session_detail(db, new_id)["kind"] == "import"
 
