@@ -23,6 +23,10 @@ from robot.skills.body import BodyParts, Head, Legs, Localiser, PerceptionView
 # Turning in place for a task (looking for an object, facing a point).
 TURN_RATE_RAD_S = 0.5
 TURN_TOLERANCE_RAD = 0.12
+# A turn in place that is blocked (an arm against the counter at a tour's stop) backs this far straight away from
+# what the robot faces, at this speed, and turns again once (m, m/s).
+BACK_OFF_M = 0.1
+BACK_OFF_M_S = 0.05
 # After the head reaches its target, the image is steady after this long (s).
 HEAD_SETTLE_S = 0.15
 
@@ -65,9 +69,11 @@ class Looking:
         self.turn_in_place(wrap(heading - yaw_of(rotation)))
 
     def turn_in_place(self, angle: float) -> None:
+        """Turn by `angle` (rad); a turn blocked by something the arm touches backs off BACK_OFF_M and turns on."""
         legs = self._legs
         self._head.point(0.0, self._head.target[1])
         turned, last = 0.0, self._yaw()
+        backed_off = False
         try:
             for rate in (TURN_RATE_RAD_S, TURN_RATE_RAD_S / 2):  # a second, slower turn takes up the overshoot
                 remaining = angle - turned
@@ -76,14 +82,19 @@ class Looking:
                 direction = math.copysign(1.0, remaining)
                 legs.drive(Velocity(0.0, 0.0, direction * rate))
                 # a turn that takes three times as long as it should is blocked (an arm against furniture)
-                deadline = self._now() + 3.0 * abs(remaining) / rate + 3.0
+                deadline = self._turn_deadline(angle - turned, rate)
                 # stop early by about what the two stopping steps still turn
                 while direction * (angle - turned) > rate * 0.3:
                     if self._now() > deadline:
-                        raise StepFailed(
-                            f"could not turn in place: turned {math.degrees(turned):.0f} of "
-                            f"{math.degrees(angle):.0f} deg (blocked?)"
-                        )
+                        if backed_off:
+                            raise StepFailed(
+                                f"could not turn in place: turned {math.degrees(turned):.0f} of "
+                                f"{math.degrees(angle):.0f} deg (blocked?)"
+                            )
+                        backed_off = True
+                        self._back_off()
+                        legs.drive(Velocity(0.0, 0.0, direction * rate))
+                        deadline = self._turn_deadline(angle - turned, rate)
                     self._ctx.wait_sim(0.02)
                     yaw = self._yaw()
                     turned += wrap(yaw - last)
@@ -96,6 +107,23 @@ class Looking:
                 last = yaw
         finally:
             legs.drive(Velocity())
+
+    def _turn_deadline(self, remaining: float, rate: float) -> float:
+        return self._now() + 3.0 * abs(remaining) / rate + 3.0
+
+    def _back_off(self) -> None:
+        """Stop, then walk straight back BACK_OFF_M: what blocks a turn in place is what the robot stands facing."""
+        legs = self._legs
+        legs.drive(Velocity())
+        while legs.moving:
+            self._ctx.wait_sim(0.02)
+        legs.drive(Velocity(-BACK_OFF_M_S, 0.0, 0.0))
+        end = self._now() + BACK_OFF_M / BACK_OFF_M_S
+        while self._now() < end:
+            self._ctx.wait_sim(0.02)
+        legs.drive(Velocity())
+        while legs.moving:
+            self._ctx.wait_sim(0.02)
 
     def fresh_detections(self) -> tuple[DetectedObject, ...]:
         assert self._perception is not None
