@@ -39,7 +39,6 @@ class FollowCommand:
     yaw_rate: float
     arrived: bool
     remaining_m: float
-    heading_error: float = 0.0  # rad: from the robot's heading to the point it steers for
 
 
 class PathFollower:
@@ -96,6 +95,6 @@ class PathFollower:
         error = math.remainder(math.atan2(ty - y, tx - x) - yaw, math.tau)
         yaw_rate = max(-MAX_TURN_RAD_S, min(MAX_TURN_RAD_S, HEADING_GAIN * error))
         if abs(error) > TURN_IN_PLACE_RAD:
-            return FollowCommand(0.0, 0.0, yaw_rate, False, remaining, error)
+            return FollowCommand(0.0, 0.0, yaw_rate, False, remaining)
         speed = MAX_FORWARD_M_S * min(1.0, remaining / SLOW_DOWN_M + self.end_speed) * math.cos(error) ** 2
-        return FollowCommand(speed, 0.0, yaw_rate, False, remaining, error)
+        return FollowCommand(speed, 0.0, yaw_rate, False, remaining)

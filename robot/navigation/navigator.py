@@ -58,9 +58,6 @@ OPEN_BAND_M = 0.15
 OPEN_AHEAD_M = 0.6
 OPEN_MIN_REMAINING_M = 0.6
 RETARGET_CHECK_S = 0.5
-# Within TIGHT_BAND_M of the usual berth from something mapped, the robot turns in place beyond this heading error.
-TIGHT_BAND_M = 0.12
-TIGHT_TURN_IN_PLACE_RAD = 0.3
 # Where the approach ends may change on the way (the camera sees the object the robot walks to): the path's end
 # follows it when it moves more than RETARGET_M, while more than RETARGET_MIN_REMAINING_M of the path is left, at
 # most MAX_RETARGETS times (a pick at the counter sidestepped 11 cm at 0.05 m/s in its final approach otherwise).
@@ -508,20 +505,10 @@ class Navigator:
                     follower = PathFollower(path, end_speed)
                     best_remaining, best_time = math.inf, self._now()
                     continue
-            vx = 0.0 if self._turn_first(command, x, y) else command.vx * self._speed_up(follower, command, x, y)
-            body.drive(vx, command.vy, command.yaw_rate)
+            body.drive(command.vx * self._speed_up(follower, command, x, y), command.vy, command.yaw_rate)
             body.wait(CONTROL_PERIOD_S)
         if stop_at_end:
             self._stop()
-
-    def _turn_first(self, command: FollowCommand, x: float, y: float) -> bool:
-        """Close to something, a turn of more than TIGHT_TURN_IN_PLACE_RAD is made in place: walking on while
-        turning carries the robot off its path by up to 10 cm, and its hands 0.22 m out to the side into what it
-        passes (a box dropped in a doorway, a new path turned 30 degrees from its heading: world seed 5)."""
-        if command.vx <= 0.0 or abs(command.heading_error) <= TIGHT_TURN_IN_PLACE_RAD:
-            return False
-        near = self.body.costmap(ROBOT_RADIUS + CLEARANCE_M + TIGHT_BAND_M)
-        return near is not None and near.blocked_at(x, y)
 
     def _speed_up(self, follower: PathFollower, command: FollowCommand, x: float, y: float) -> float:
         """The factor on the follower's speed: OPEN_M_S over its usual speed in the open, else 1."""

@@ -284,22 +284,3 @@ def test_a_robot_carrying_something_keeps_to_the_usual_speed_in_the_open() -> No
     report = Navigator(body, lambda: body.t, open_speed_m_s=MAX_FORWARD_M_S).go((2.0, 0.0))
     assert report.final_error_m < 0.1
     assert max(vx for vx, _, _ in body.commands) == pytest.approx(MAX_FORWARD_M_S)
-
-
-@pytest.mark.parametrize("beside_a_wall", [True, False])
-def test_close_to_something_a_robot_turns_towards_its_path_before_walking_on(beside_a_wall: bool) -> None:
-    """Walking on while turning 20 degrees carries it several cm off its path, and its hands into what is beside it;
-    in the open it turns as it walks."""
-    goal = (1.5, -0.6)  # 22 degrees to its right: less than a turn in place in the open
-    wall = [(x, 0.3) for x in np.arange(-0.5, 0.5, 0.05)] if beside_a_wall else []  # 0.3 m to its left
-    body = MappedBody(_map_with(*wall))
-    report = Navigator(body, lambda: body.t).go(goal)
-    assert report.final_error_m < 0.1
-    vx, _, yaw_rate = body.commands[0]
-    if not beside_a_wall:
-        assert vx > 0.0
-        return
-    assert vx == 0.0 and yaw_rate < 0.0
-    first_step = next(i for i, (v, _, _) in enumerate(body.commands) if v > 0.0)
-    x, y, yaw = body.track[first_step - 1]
-    assert (x, y) == pytest.approx((0.0, 0.0), abs=1e-9) and yaw < -0.05  # turned in place, then walked
