@@ -69,7 +69,13 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
 
         sets = tuple(s.strip() for s in args.sets.split(",") if s.strip())
         engines = tuple(e.strip() for e in args.engines.split(",") if e.strip())
-        result = run_speech(sets=sets, engines=engines, robot_microphone=not args.no_robot_microphone, quick=args.quick)
+        result = run_speech(
+            sets=sets,
+            engines=engines,
+            robot_microphone=not args.no_robot_microphone,
+            quick=args.quick,
+            whisper_model=args.whisper_model,
+        )
     elif suite == "planner":
         from app.settings import get_settings
         from bench.planner import parse_backends, run_planner

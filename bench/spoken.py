@@ -124,6 +124,7 @@ def run_set(
     engines: tuple[str, ...],
     snrs: tuple[float | None, ...] = (None, NOISY_SNR_DB),
     whisper_threads: int = 2,
+    whisper_model: str = "",
 ) -> list[Heard]:
     layout = generate_world(0)
     world = WorldContext.from_layout(layout)
@@ -132,7 +133,7 @@ def run_set(
     if "whisper" in recognizers:
         from robot.speech.whisper import WhisperASR
 
-        recognizers["whisper"] = WhisperASR("", world.objects, world.places, threads=whisper_threads)
+        recognizers["whisper"] = WhisperASR(whisper_model, world.objects, world.places, threads=whisper_threads)
     spotter = StopSpotter(world.objects, world.places)
     items: list[tuple[str, str, Case | None]] = [("command", c.text, c) for c in spoken.commands]
     items += [("with_stop", c.text, c) for c in spoken.with_stop] + [("stop", t, None) for t in spoken.stops]
@@ -364,19 +365,24 @@ COMMAND_KINDS = ("command", "with_stop")  # utterances with a plan to give
 
 
 def run_speech(
-    sets: tuple[str, ...] = ("dev", "heldout", "heldout2", "heldout3"),
+    sets: tuple[str, ...] = ("dev", "heldout", "heldout2", "heldout3", "heldout4"),
     engines: tuple[str, ...] = ("whisper", "pocketsphinx"),
     robot_microphone: bool = True,
     quick: bool = False,
+    whisper_model: str = "",
 ) -> dict[str, Any]:
     """`quick`: per set one voice, one command, one stop and one command with a stop in it, clean only, and two
     stops on the robot microphone (shows the bench works; its figures mean little)."""
     started = time.perf_counter()
     chosen = [_few(SETS[name]) if quick else SETS[name] for name in sets]
     snrs = (None,) if quick else (None, NOISY_SNR_DB)
-    results = [r for spoken in chosen for r in run_set(spoken, engines, snrs=snrs)]
+    results = [r for spoken in chosen for r in run_set(spoken, engines, snrs=snrs, whisper_model=whisper_model)]
     summary = summarise(results)
     result: dict[str, Any] = {"suite": "speech", "planner": "rules (this build's)", "quick": quick, "sets": summary}
+    if "whisper" in engines:
+        from robot.speech.whisper import model_dir
+
+        result["whisper_model"] = str(model_dir(whisper_model))
     if robot_microphone:
         if quick:
             result["robot_microphone_stop"] = run_robot_microphone_stops(QUICK_ROBOT_STOPS, engine="pocketsphinx")

@@ -568,8 +568,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     bench.add_argument(
         "--sets",
-        default="dev,heldout,heldout2,heldout3",
-        help="speech: spoken sets (dev, heldout, heldout2, heldout3), comma-separated",
+        default="dev,heldout,heldout2,heldout3,heldout4",
+        help="speech: spoken sets (dev, heldout, heldout2, heldout3, heldout4), comma-separated",
+    )
+    bench.add_argument(
+        "--whisper-model",
+        default="",
+        help="speech: a CTranslate2 whisper model directory to measure instead of the packaged tiny.en",
     )
     bench.add_argument(
         "--engines", default="whisper,pocketsphinx", help="speech: recognisers (whisper, pocketsphinx), comma-separated"

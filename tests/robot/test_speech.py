@@ -292,9 +292,28 @@ def test_the_spotter_gives_the_same_verdict_however_the_audio_is_cut_into_blocks
 def test_a_transcript_is_a_stop_when_its_words_are_a_stop_phrase_with_a_few_more() -> None:
     from robot.speech.stop_word import is_stop_utterance
 
-    for text in ("Stop!", "stop right now please", "Robot, stop.", "Emergency stop now", "hey robot halt", "Freeze."):
+    for text in (
+        "Stop!",
+        "stop right now please",
+        "Robot, stop.",
+        "Emergency stop now",
+        "hey robot halt",
+        "Freeze.",
+        "Stop the robot.",
+        "Stop right there!",
+        "halt right away",
+    ):
         assert is_stop_utterance(text), text
-    for text in ("go to the dock and stop there", "stop by the kitchen and get the mug", "top", "bus stop", ""):
+    for text in (
+        "go to the dock and stop there",
+        "stop by the kitchen and get the mug",
+        "top",
+        "bus stop",
+        "",
+        "stop the robot from falling over",
+        "stop at the table",
+        "put the robot on the dock",
+    ):
         assert not is_stop_utterance(text), text
 
 

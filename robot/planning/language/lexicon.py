@@ -75,12 +75,14 @@ FILLER_SUFFIXES = word_list("""
     and, then, if possible, if you would, yeah, pls, plz, without stopping, without a stop, without pausing,
     without a break, non stop, nonstop, in one go, without stopping on the way, without stopping anywhere,
     do not stop, do not stop for anything, do not stop on the way, do not stop along the way, do not stop anywhere,
-    and do not stop, no stopping, no stops""")
+    and do not stop, no stopping, no stops, do not stop until you have it, do not stop until you get it,
+    do not stop until you are done, do not stop until you get there, do not stop until you are there,
+    and do not stop until you have it, and do not stop until you get it, and do not stop until you are done""")
 # said anywhere in a request without changing it ("bring the mug for me to the table")
 FILLER_INFIXES = word_list("please, for me, for us, kindly")
 # what joins two steps said one after the other
 SEQUENCE_WORDS = word_list("""and then, and after that, and afterwards, and finally, and next, and lastly, then,
-                           after that, afterwards, next, finally, lastly, and""")
+                           after that, afterwards, next, finally, lastly, and, but then, but""")
 
 # --- the things in the world ---------------------------------------------------------------------------------
 
