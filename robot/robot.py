@@ -408,6 +408,8 @@ class Robot(InProcessPort):
         self.body.start()
         if not was_connected:  # the real robot: its first state once the bus is read
             self.publisher.publish(self.body.latest())
+        if self.perception is not None:  # it places its sensors by the robot's state: started once there is one
+            self.perception.start()
         self.loop.start()
         if self.runner is not None:
             self.runner.start()

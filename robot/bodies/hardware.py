@@ -194,8 +194,6 @@ class HardwareBody:
             self.bus.close()
             raise BusError(f"no answer from {', '.join(silent)} on {self.config.port}")
         missing = self.sensing.start()
-        if self.perception is not None:
-            self.perception.start()
         if missing:
             self.links.publish("hardware/sensors", f"not found: {', '.join(missing)}", Level.WARN, missing=missing)
         with self.bus_lock:

@@ -137,8 +137,7 @@ class SimBody:
     # lifecycle
 
     def start(self) -> None:
-        if self.perception is not None:
-            self.perception.start()
+        """Nothing to connect: the core starts the perception once the first state is published."""
 
     def before_shutdown(self) -> None:
         """Nothing to bring down: a simulation just stops."""

@@ -49,8 +49,9 @@ def test_the_served_real_robot_walks_to_a_place_through_the_rig(tmp_path) -> Non
                 600.0,
             )
             events = [e["message"] for e in server.get("/api/events")][-10:]
-            assert plan["state"] == "succeeded", (plan, events)
-            truth = rig.truth()
+            truth = rig.truth()  # where it is in the rig's world, said with a failure (the dock pad's edge: a fall)
+            where = (truth.base_position, truth.tilt_deg, server.get("/api/state")["perception"]["status"])
+            assert plan["state"] == "succeeded", (plan, events, where)
             dock = next(p for p in layout.places if p.name == "charging dock").approach
             assert not truth.fallen and math.dist(truth.base_position[:2], dock[:2]) < 0.15
             # the state and the 3D view place it by its legs' estimate: where it is, as far as it can know

@@ -161,3 +161,40 @@ def test_a_stalled_camera_and_an_unplugged_lidar_are_said_and_nothing_else_break
             assert status(robot, "sensors/imu", Level.OK) and not robot.state().estop_latched
         finally:
             robot.stop()
+
+
+def test_a_walking_robots_perception_starts_once_it_has_a_state_and_maps_its_lidar(layout, monkeypatch) -> None:
+    """Perception places its sensors by the robot's state: started before the first one (a slow start on a busy
+    machine), it failed for good and the robot never had a map to walk by."""
+    from robot.perception.lidar import LaserScan
+    from robot.perception.service import PerceptionService
+    from robot.sensors.ld06_emulator import Ld06Emulator
+
+    robots: list[HardwareWorker] = []
+    started_with_state: list[bool] = []
+    original_start = PerceptionService.start
+
+    def start(service: PerceptionService) -> None:
+        try:
+            started_with_state.append(robots[0].state() is not None)
+        except RuntimeError:  # no state yet
+            started_with_state.append(False)
+        original_start(service)
+
+    monkeypatch.setattr(PerceptionService, "start", start)
+    ranges = np.full(360, 2.0, dtype=np.float32)
+    scan = LaserScan(0.0, -math.pi, 2 * math.pi / 360, 0.02, 12.0, ranges, 0.3)
+    with (
+        BusEmulator([j.servo_id for j in CONFIG.joints], sensors=True) as bus,
+        Ld06Emulator(scan) as lidar,
+    ):
+        config = dataclasses.replace(CONFIG, port=bus.port_name, lidar=f"ld06:{lidar.port_name}")
+        robot = HardwareWorker(config, layout, deadman_s=0.0, walk=True)
+        robots.append(robot)
+        robot.start()
+        try:
+            assert started_with_state == [True]
+            wait(lambda: robot.state().perception.map_scans >= 3)
+            assert robot.state().perception.status == "ok"
+        finally:
+            robot.stop()
