@@ -81,6 +81,7 @@ def hil_trial(seed: int, duration_s: float, lockstep: bool = True) -> dict[str, 
                     break
             time.sleep(1.1)  # the loop's statistics refresh once a second
             control = robot.state().control
+            legs = robot.state().locomotion
             split = robot.body.tick_split.summary()
         finally:
             robot.stop()
@@ -108,6 +109,8 @@ def hil_trial(seed: int, duration_s: float, lockstep: bool = True) -> dict[str, 
         "deadline_misses": control.deadline_misses,
         "ticks": control.ticks,
         "late_physics_blocks": truth.late_blocks,
+        "late_walk_plans": legs.late_plans if legs is not None else 0,
+        "late_walk_plans_s": round(legs.late_plans_s, 3) if legs is not None else 0.0,
         **{k: round(v, 3) for k, v in split.items()},
     }
 

@@ -382,6 +382,8 @@ class LocomotionState:
     zmp: tuple[float, float] | None = None
     support: str = "both"
     estimated_trunk: tuple[float, ...] = ()  # x, y, z, qw, qx, qy, qz: the whole trunk pose the estimate holds
+    late_plans: int = 0  # walk plans that came after they were due, since start (a gait planner short of CPU)
+    late_plans_s: float = 0.0  # their lateness summed (s)
 
 
 @dataclass(frozen=True)

@@ -480,6 +480,7 @@ class HardwareBody:
             lost_servos=lambda: self._reading.lost if self._reading is not None else (),
             hardware_ids=[f"XM430-W350 id {j.servo_id}" for j in self.config.joints],
             devices=lambda: [*self.sensing.statuses(), self._bus_status()],
+            locomotion=lambda: self.links.latest_state().locomotion,
         )
 
     def _bus_status(self) -> DiagnosticStatus:

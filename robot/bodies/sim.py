@@ -288,6 +288,7 @@ class SimBody:
             imu_stamp=lambda: self._measured.imu_stamp_s,
             voice=voice,
             sensor_hz=SENSOR_HZ,
+            locomotion=lambda: latest_state().locomotion,
         )
 
     # ---------------------------------------------------------------------------------------------------------

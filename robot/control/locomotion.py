@@ -24,7 +24,7 @@ from robot.control.gait import (
 )
 from robot.control.odometry import LegOdometry, Pose2D
 from robot.control.pose_loop import PoseLoop, WalkVelocity
-from robot.control.walking import GaitPlanner, WalkingController, WalkPhase
+from robot.control.walking import GaitPlanner, PlanLateness, WalkingController, WalkPhase
 from robot.control.whole_body import WholeBodyIK
 
 # A foot carrying more than this (N) is on the ground, whatever the plan says.
@@ -140,6 +140,11 @@ class LocomotionController:
     @property
     def phase(self) -> WalkPhase:
         return self.walking.phase
+
+    @property
+    def plan_lateness(self) -> PlanLateness:
+        """Walk plans that came after they were due (real time on a busy machine)."""
+        return self.walking.lateness
 
     @property
     def moving(self) -> bool:

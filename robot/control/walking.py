@@ -52,6 +52,15 @@ class WalkPhase(StrEnum):
 
 
 @dataclass(frozen=True)
+class PlanLateness:
+    """Walk plans that came after they were due (in real time, a planner short of CPU): how many since the walk
+    controller was made, and their lateness summed (gait time, s), so a reader can take the rate over a window."""
+
+    late_plans: int = 0
+    late_s_total: float = 0.0
+
+
+@dataclass(frozen=True)
 class GaitView:
     """What a viewer shows of the walk: the footsteps ahead, CoM and ZMP (planner frame), and the phase."""
 
@@ -81,6 +90,7 @@ class WalkingController:
         self._last_request = 0.0
         self._targets = self.ready_targets.copy()
         self.stepped = False  # a foot has left the ground since this walk started
+        self.lateness = PlanLateness()
 
     @property
     def active(self) -> bool:
@@ -115,6 +125,9 @@ class WalkingController:
                 if self.phase == WalkPhase.STARTING:
                     return self._targets.copy()  # stand, the gait clock held, until the first plan comes
                 return self._track(t)
+            if t - self._pending_at > 1e-9:  # the walk carried on along its last segment for a tick or more
+                late = self.lateness
+                self.lateness = PlanLateness(late.late_plans + 1, late.late_s_total + t - self._pending_at)
             self._segment = segment
             self._pending_at = None
             if self.phase == WalkPhase.STARTING:

@@ -162,6 +162,8 @@ def legs_state(
         velocity=(current.vx, current.vy, current.yaw_rate),
         estimated_pose=(pose.x, pose.y, pose.yaw),
         estimated_trunk=(*(float(v) for v in trunk_position), *matrix_to_quat_wxyz(trunk_rotation)),
+        late_plans=loco.plan_lateness.late_plans,
+        late_plans_s=loco.plan_lateness.late_s_total,
     )
     if overlay is None:
         return state

@@ -51,6 +51,22 @@ def control_status(
     )
 
 
+def gait_status(late_plans: int, late_s: float, window_s: float, limits: Thresholds) -> DiagnosticStatus:
+    """The walk's plans over the last `window_s` (real time): `late_plans` came after they were due, late by
+    `late_s` in all. A late plan is walked on the last one's steps: often, the walk follows its commands late and
+    a busy machine is the reason (the gait planner's process is short of CPU)."""
+    per_s = late_plans / window_s if window_s > 0 else 0.0
+    mean_ms = late_s / late_plans * 1e3 if late_plans else 0.0
+    values = (("late_plans", late_plans), ("late_plans_per_s", per_s), ("mean_late_ms", mean_ms))
+    if per_s > limits.late_walk_plans_warn_per_s:
+        message = (
+            f"{late_plans} walk plans came late in {window_s:.0f} s (by {mean_ms:.0f} ms on average): "
+            "the gait planner is short of CPU"
+        )
+        return DiagnosticStatus("control/gait", Level.WARN, message, values=values)
+    return DiagnosticStatus("control/gait", Level.OK, "walk plans on time", values=values)
+
+
 def servo_statuses(
     names: Sequence[str],
     readings: ServoReadings,

@@ -10,13 +10,21 @@ from dataclasses import dataclass
 from typing import Any
 
 from robot.control.stats import LoopStats
-from robot.diagnostics.checks import control_status, power_status, sensor_statuses, servo_statuses
+from robot.diagnostics.checks import control_status, gait_status, power_status, sensor_statuses, servo_statuses
 from robot.diagnostics.compute import ComputeProbe
 from robot.diagnostics.links import PlannerLink
 from robot.diagnostics.monitor import DiagnosticsMonitor
 from robot.diagnostics.thresholds import Thresholds
 from robot.hardware.xm430 import ServoReadings
-from robot.interface import DiagnosticArray, DiagnosticStatus, Level, PerceptionState, PowerState, SensorFeed
+from robot.interface import (
+    DiagnosticArray,
+    DiagnosticStatus,
+    Level,
+    LocomotionState,
+    PerceptionState,
+    PowerState,
+    SensorFeed,
+)
 from robot.planning.config import PlannerConfig
 
 
@@ -39,6 +47,7 @@ class RobotReadings:
     lost_servos: Callable[[], tuple[str, ...]] = lambda: ()
     hardware_ids: Sequence[str] | None = None  # e.g. "XM430-W350 id 13"
     devices: Callable[[], list[DiagnosticStatus]] = lambda: []  # a real robot's own sensor drivers
+    locomotion: Callable[[], LocomotionState | None] = lambda: None  # the legs' state, on a robot that walks
 
 
 class RobotDiagnostics:
@@ -61,6 +70,7 @@ class RobotDiagnostics:
         self.planner_link = PlannerLink(planner, limits.link_check_period_s, limits.link_timeout_s) if planner else None
         self.planner_name = planner_name
         self._misses = (time.monotonic(), readings.stats.deadline_misses)
+        self._late_plans = (time.monotonic(), 0, 0.0)
         self.monitor = DiagnosticsMonitor(
             [self.compute.statuses, self._control, self._servos, self._power, self._sensors, self._links],
             publish,
@@ -103,7 +113,13 @@ class RobotDiagnostics:
         then, before = self._misses
         self._misses = (now, misses)
         rate = (misses - before) / (now - then) if now > then else 0.0
-        return [control_status(stats.snapshot(), self._tick_age(), rate, self.realtime, self.limits)]
+        statuses = [control_status(stats.snapshot(), self._tick_age(), rate, self.realtime, self.limits)]
+        legs = self.readings.locomotion()
+        if self.realtime and legs is not None:  # headless, the walk waits for its plans
+            then, plans, late_s = self._late_plans
+            self._late_plans = (now, legs.late_plans, legs.late_plans_s)
+            statuses.append(gait_status(legs.late_plans - plans, legs.late_plans_s - late_s, now - then, self.limits))
+        return statuses
 
     def _servos(self) -> list[DiagnosticStatus]:
         r = self.readings

@@ -19,6 +19,7 @@ class Thresholds:
     rtf_warn: float = 0.95
     deadline_misses_warn_per_s: float = 1.0
     control_stale_s: float = 0.5  # no tick for this long (50 periods at 100 Hz): ERROR, safe stop
+    late_walk_plans_warn_per_s: float = 2.0  # of the walk's ten plans a second, came after they were due
     # servos (the XM430 shuts itself down at 80 C: the robot stops before it does)
     servo_temperature_warn_c: float = 65.0
     servo_temperature_error_c: float = 75.0

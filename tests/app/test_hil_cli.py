@@ -65,6 +65,8 @@ def test_bench_walk_through_the_rig_writes_falls_tracking_and_the_ticks_bus_and_
     assert trial["physics_s"] >= 4.0 and trial["ticks"] > 0
     # the tick's two parts, each measured: the bus's round trip (servos, boards, goals) and the compute
     assert 0 < trial["bus_p50_ms"] <= trial["bus_p99_ms"] and 0 < trial["compute_p50_ms"] <= trial["compute_p99_ms"]
+    # and the walk plans that came late (the gait planner shares the cores): counted, with their lateness
+    assert trial["late_walk_plans"] >= 0 and (trial["late_walk_plans_s"] > 0) == (trial["late_walk_plans"] > 0)
 
 
 def test_run_through_the_rig_picks_the_mug_with_the_real_robots_bus_lidar_and_camera(tmp_path) -> None:

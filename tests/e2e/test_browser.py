@@ -168,7 +168,9 @@ def test_keyboard_teleop_walks_the_robot_and_letting_go_stops_it(page, server) -
     expect(page.locator("#mode")).to_have_text("mode: teleop", timeout=5_000)
     expect(page.locator("#st-walk")).to_contain_text("walking", timeout=5_000)
     deadline = time.monotonic() + 60
-    while not _moved(server, start, 0.1) and time.monotonic() < deadline:  # held until it walked, however busy
+    # held until it walked, however busy (past the 0.1 m asserted below: the estimate may settle back a little as it
+    # stops, as the legs' odometry meets the lidar's correction)
+    while not _moved(server, start, 0.15) and time.monotonic() < deadline:
         page.wait_for_timeout(200)
     page.keyboard.up("w")
     expect(page.locator("#teleop-cmd")).to_have_text("released: stopping")

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from robot.diagnostics.checks import control_status, power_status, sensor_statuses, servo_statuses
+from robot.diagnostics.checks import control_status, gait_status, power_status, sensor_statuses, servo_statuses
 from robot.diagnostics.monitor import DiagnosticsMonitor
 from robot.diagnostics.thresholds import Thresholds
 from robot.hardware import xm430
@@ -123,6 +123,15 @@ def test_control_loop_levels() -> None:
     assert stale.level == Level.ERROR and stale.stops_motion and "stale" in stale.message
     assert control_status(stats, 0.8, 0.0, False, LIMITS).level == Level.OK  # headless: no wall-clock deadline
     assert "deadline misses" in control_status(stats, 0.01, 5.0, True, LIMITS).message
+
+
+def test_late_walk_plans_are_said_when_they_come_often() -> None:
+    on_time = gait_status(0, 0.0, 1.0, LIMITS)
+    assert on_time.level == Level.OK and on_time.name == "control/gait"
+    assert gait_status(1, 0.05, 1.0, LIMITS).level == Level.OK  # one now and then: the walk carries on
+    busy = gait_status(5, 0.25, 1.0, LIMITS)
+    assert busy.level == Level.WARN and "5 walk plans came late" in busy.message and "50 ms" in busy.message
+    assert not busy.stops_motion
 
 
 def test_sensor_levels() -> None:

@@ -268,6 +268,7 @@ def _walking_in_real_time(model_path: Path) -> tuple[HeldPlanner, WalkingControl
 
 def test_in_real_time_a_late_plan_does_not_stall_the_walk_until_its_segment_runs_out(model_path) -> None:
     planner, walk = _walking_in_real_time(model_path)
+    assert walk.lateness.late_plans == 0  # on time so far
     planner.held = True  # the planner falls 0.4 s behind: the walk goes on along the segment it has
     late = _run(walk, 40)
     assert planner.waits == 0 and planner.answer is not None  # a replan is due and not taken, nothing waited
@@ -277,6 +278,7 @@ def test_in_real_time_a_late_plan_does_not_stall_the_walk_until_its_segment_runs
     _run(walk, 1)
     assert len(planner.requested_at) == asked + 1  # taken as soon as it came, and the next one asked for at once
     assert planner.requested_at[-1] - planner.requested_at[-2] > 0.35
+    assert walk.lateness.late_plans == 1 and 0.3 < walk.lateness.late_s_total < 0.4  # said, for diagnostics
     planner.held = True  # far behind: once the segment (1 s ahead) is about to end, the walk waits for the plan
     _run(walk, 150)
     assert planner.waits >= 1
