@@ -45,7 +45,7 @@ from robot.interface import (
 from robot.model import humanoid_v1
 from robot.model.world import WorldLayout
 from robot.perception.driver_sensors import DriverSensors
-from robot.perception.service import PerceptionService
+from robot.perception.service import SENSOR_HZ, PerceptionService
 from robot.sim.backend import MujocoSimBackend
 
 ESTOP_TORQUE_OFF_AFTER_S = 3.0  # the controlled stop's crouch has this long before torque goes off
@@ -464,19 +464,26 @@ class HardwareBody:
         sensor_feed: Callable[[], SensorFeed],
         voice: Callable[[], Any],
     ) -> RobotReadings:
+        # the perception's camera and lidar (a walking robot's: detections and the map), besides their drivers
+        perceives = tuple(
+            name
+            for name, device in (("camera", self.sensing.camera), ("lidar", self.sensing.lidar))
+            if device is not None and self.perception is not None
+        )
         return RobotReadings(
             joint_names=self.joint_names,
             stats=stats,
             servos=self._servo_readings,
             power=lambda: None,
             battery_cells=0,
-            perception=lambda: None,
-            sensor_feed=SensorFeed,
+            perception=perception if perceives else lambda: None,
+            sensor_feed=sensor_feed if perceives else SensorFeed,
             sim_time=self.now,
             imu_stamp=lambda: None,
             voice=lambda: None,
-            sensor_hz=0.0,
+            sensor_hz=SENSOR_HZ,
             has_imu=False,
+            perceives=perceives,
             lost_servos=lambda: self._reading.lost if self._reading is not None else (),
             hardware_ids=[f"XM430-W350 id {j.servo_id}" for j in self.config.joints],
             devices=lambda: [*self.sensing.statuses(), self._bus_status()],

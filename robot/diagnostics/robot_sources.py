@@ -48,6 +48,7 @@ class RobotReadings:
     hardware_ids: Sequence[str] | None = None  # e.g. "XM430-W350 id 13"
     devices: Callable[[], list[DiagnosticStatus]] = lambda: []  # a real robot's own sensor drivers
     locomotion: Callable[[], LocomotionState | None] = lambda: None  # the legs' state, on a robot that walks
+    perceives: tuple[str, ...] = ("camera", "lidar")  # the sensors its perception has (a real robot: those fitted)
 
 
 class RobotDiagnostics:
@@ -144,7 +145,8 @@ class RobotDiagnostics:
             r.sensor_hz,
             self.limits,
         )
-        return (statuses if r.has_imu else [s for s in statuses if s.name != "sensors/imu"]) + r.devices()
+        wanted = {f"sensors/{name}" for name in r.perceives} | ({"sensors/imu"} if r.has_imu else set())
+        return [s for s in statuses if s.name in wanted] + r.devices()
 
     def _links(self) -> list[DiagnosticStatus]:
         out = [

@@ -196,5 +196,12 @@ def test_a_walking_robots_perception_starts_once_it_has_a_state_and_maps_its_lid
             assert started_with_state == [True]
             wait(lambda: robot.state().perception.map_scans >= 3)
             assert robot.state().perception.status == "ok"
+            # said in diagnostics as the simulation's are (a perception that failed would be an ERROR here), for
+            # the sensors it has: a lidar, no camera
+            lidar_status = wait(
+                lambda: (s := robot.sample_diagnostics().find("sensors/lidar")) and s.message != "starting" and s
+            )
+            assert lidar_status.level in (Level.OK, Level.WARN) and "Hz" in lidar_status.message
+            assert robot.sample_diagnostics().find("sensors/camera") is None
         finally:
             robot.stop()
