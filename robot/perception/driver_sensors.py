@@ -22,9 +22,12 @@ from robot.perception.detector import ObjectDetector, catalogue
 from robot.perception.geometry import MUJOCO_TO_OPTICAL, invert, quat_wxyz_to_matrix, transform, yaw_of
 from robot.perception.lidar import LaserScan
 from robot.perception.occupancy import GridSpec, OccupancyGrid
+from robot.perception.pose_history import PoseHistory
 from robot.perception.scan_mapping import ScanMapping
 from robot.perception.suite import JPEG_QUALITY, MAP_SIZE_M, CameraFrame, SensorOutput, SensorSnapshot
 from robot.sensors.camera import CameraImage
+
+LIDAR_SWEEP_S = 0.1  # an LD06 turns at 10 Hz: a scan is stamped when its sweep ends
 
 
 class ImageSource(Protocol):
@@ -56,6 +59,7 @@ class DriverSensors:
         self._map_every = map_every
         self._last_image = -1
         self._last_scan: LaserScan | None = None
+        self._lidar_poses = PoseHistory()
 
     def process(self, snapshot: SensorSnapshot) -> SensorOutput:
         data = self.data
@@ -67,13 +71,16 @@ class DriverSensors:
         to_odom = believed @ invert(trunk)  # the kinematics' world -> where odometry believes things are
         timings: dict[str, float] = {}
         scan_frame = grid = None
+        site = to_odom @ transform(data.site_xmat[self._lidar_site].reshape(3, 3), data.site_xpos[self._lidar_site])
+        now_pose = (float(site[0, 3]), float(site[1, 3]), yaw_of(site[:3, :3]), float(site[2, 3]))
+        self._lidar_poses.add(snapshot.sim_time_s, now_pose)
         scan = self.lidar.latest() if self.lidar is not None and snapshot.lidar else None
         if scan is not None and scan is not self._last_scan:
             self._last_scan = scan
             started = time.perf_counter()
-            site = to_odom @ transform(data.site_xmat[self._lidar_site].reshape(3, 3), data.site_xpos[self._lidar_site])
-            odom_pose = (float(site[0, 3]), float(site[1, 3]), yaw_of(site[:3, :3]))
-            scan_frame = self.mapping.add(replace(scan, height_m=float(site[2, 3])), odom_pose)
+            # where the lidar was mid-sweep (its stamp is the sweep's end), not where it is now
+            x, y, yaw, height = self._lidar_poses.at(scan.sim_time_s - LIDAR_SWEEP_S / 2) or now_pose
+            scan_frame = self.mapping.add(replace(scan, height_m=height), (x, y, yaw))
             if self.mapping.mapper.scans % self._map_every == 1 or self._map_every == 1:
                 grid = self.mapping.mapper.snapshot()
             timings["lidar_map_ms"] = (time.perf_counter() - started) * 1e3

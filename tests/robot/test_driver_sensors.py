@@ -12,6 +12,7 @@ import pytest
 
 from robot.model.world import generate_world
 from robot.perception.driver_sensors import DriverSensors
+from robot.perception.lidar import LaserScan
 from robot.perception.suite import SensorSnapshot, SensorSuite
 from robot.sensors.camera import CameraImage
 from robot.sensors.ld06 import Ld06Lidar
@@ -89,3 +90,40 @@ def test_a_colour_only_camera_goes_to_the_page_without_detections(suite) -> None
     )
     out = sensors.process(SensorSnapshot(2.0, qpos, qpos[0:3].copy(), qpos[3:7].copy()))
     assert out.camera is not None and out.camera.detections == () and out.camera.seq == 7 and out.scan is None
+
+
+class OneScan:
+    """A lidar whose newest scan is set by the test."""
+
+    def __init__(self) -> None:
+        self.scan: LaserScan | None = None
+
+    def latest(self) -> LaserScan | None:
+        return self.scan
+
+
+def test_a_scan_taken_while_turning_is_mapped_where_the_lidar_was_mid_sweep(suite) -> None:
+    """A real lidar's scan reaches perception after its sweep (and later on a busy machine): placed where the
+    robot is when it is processed, a turn smears the map and misleads the scan matching."""
+
+    def snapshot(t: float, yaw: float) -> SensorSnapshot:
+        qpos = MujocoSimBackend(suite.layout, suite.model).qpos()
+        qpos[3:7] = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
+        return SensorSnapshot(t, qpos, qpos[0:3].copy(), qpos[3:7].copy())
+
+    def scan(stamp_s: float) -> LaserScan:
+        return LaserScan(stamp_s, -math.pi, 2 * math.pi / 360, 0.02, 12.0, np.full(360, 2.0, dtype=np.float32), 0.3)
+
+    lidar = OneScan()
+    still = DriverSensors(suite.layout, None, lidar)
+    lidar.scan = scan(0.05)  # its sweep from 0.0 to 0.1 s, the robot not turning yet
+    mount_yaw = still.process(snapshot(0.0, 0.0)).scan.odom_pose[2]
+
+    lidar.scan = None
+    turning = DriverSensors(suite.layout, None, lidar)
+    for t, yaw in ((0.0, 0.0), (0.1, 0.1), (0.2, 0.2)):  # turning at 1 rad/s
+        if t == 0.2:
+            lidar.scan = scan(0.15)  # swept from 0.05 to 0.15 s: taken, on average, at 0.1 s
+        out = turning.process(snapshot(t, yaw))
+    assert out.scan is not None
+    assert out.scan.odom_pose[2] == pytest.approx(mount_yaw + 0.1, abs=1e-3)  # not + 0.2, where it is now
