@@ -5,6 +5,11 @@
 - Swing-leg levelling: the swing leg is turned at the hip by the trunk's measured pitch, so the foot lands where
   the plan put it in the world even while the body rocks. Without it the body rocked back ~3 degrees in each
   single support and every step landed short: forward walking covered half the commanded distance.
+- Stance-leg levelling: the leg on the floor is turned at the hip (roll and pitch) against the trunk's measured
+  tilt, so the trunk stays upright over the foot that carries it. Without it the trunk sagged towards the swinging
+  leg in every single support, 12 degrees peak to peak, and the hand on the low side brushed the floor; with it
+  the sag is about 2 degrees (docs/design/walking.md, "Stance-leg levelling"). Only with the arms down: it was
+  tuned so, and with an arm held out carrying something it shook the hand.
 
 Signs come from each joint's axis in the model (a mirrored sign makes the robot fall), so left and right legs
 get the same physical correction.
@@ -27,6 +32,12 @@ MAX_CORRECTION_RAD = 0.25
 # Swing-leg levelling gain (1.0 = the full measured pitch): forward tracking error 51% -> 15% open loop.
 SWING_LEVELLING_GAIN = 1.0
 MAX_LEVELLING_RAD = 0.15
+# Stance-leg levelling gains (rad of hip per rad of trunk tilt), chosen on open-floor walks (scripts 0-19) and checked
+# on others (100-139). Roll below 1.5 left a sway of 7-9 degrees; roll alone made sideways walks drift back (9 cm in
+# 0.3 m), which the pitch term takes back; pitch 0.7 or roll 2.5 start a rocking of 6-8 degrees when turning in place.
+STANCE_ROLL_GAIN = 2.0
+STANCE_PITCH_GAIN = 0.6
+MAX_STANCE_LEVELLING_RAD = 0.2
 
 
 @dataclass(frozen=True)
@@ -57,11 +68,22 @@ class AnkleBalance:
         self._hip_pitch_idx = {s: names.index(f"{s[0]}_hip_pitch") for s in ("left", "right")}
         self._hip_pitch_sign = {s: float(np.sign(joint_axes[f"{s[0]}_hip_pitch"][1])) for s in ("left", "right")}
         self.swing_gain = SWING_LEVELLING_GAIN
+        self._hip_roll_idx = {s: names.index(f"{s[0]}_hip_roll") for s in ("left", "right")}
+        self._hip_roll_sign = {s: float(np.sign(joint_axes[f"{s[0]}_hip_roll"][0])) for s in ("left", "right")}
+        self.stance_roll_gain = STANCE_ROLL_GAIN
+        self.stance_pitch_gain = STANCE_PITCH_GAIN
 
     def correct(
-        self, targets: np.ndarray, quat_wxyz: np.ndarray, gyro: np.ndarray, swing_leg: str | None = None
+        self,
+        targets: np.ndarray,
+        quat_wxyz: np.ndarray,
+        gyro: np.ndarray,
+        swing_leg: str | None = None,
+        level_stance: bool = True,
     ) -> np.ndarray:
-        """Targets with the ankle correction (and the swing leg's levelling, if a leg swings) added; a new array.
+        """Targets with the ankle correction (and, while a leg swings, both legs' levelling) added; a new array.
+        `level_stance` False leaves the supporting leg to the ankles (the arms not hanging down: see
+        `WholeBodyIK.arms_down`).
         Without an IMU reading (NaN: a real robot's IMU missed a tick) there is nothing to correct by: unchanged."""
         if not (np.isfinite(quat_wxyz).all() and np.isfinite(gyro).all()):
             return np.array(targets, dtype=float)
@@ -75,4 +97,14 @@ class AnkleBalance:
             # turn the whole leg against the trunk's pitch: the foot keeps its planned world placement and stays flat
             level = clamp(self.swing_gain * tilt.pitch, -MAX_LEVELLING_RAD, MAX_LEVELLING_RAD)
             out[self._hip_pitch_idx[swing_leg]] -= level * self._hip_pitch_sign[swing_leg]
+            if level_stance:
+                self._level_stance(out, tilt, "left" if swing_leg == "right" else "right")
         return out
+
+    def _level_stance(self, out: np.ndarray, tilt: TrunkTilt, stance: str) -> None:
+        """Turn the supporting leg at the hip so the trunk above it comes back upright (in place, on `out`)."""
+        limit = MAX_STANCE_LEVELLING_RAD
+        roll = clamp(self.stance_roll_gain * tilt.roll, -limit, limit)
+        pitch = clamp(self.stance_pitch_gain * tilt.pitch, -limit, limit)
+        out[self._hip_roll_idx[stance]] += roll * self._hip_roll_sign[stance]
+        out[self._hip_pitch_idx[stance]] -= pitch * self._hip_pitch_sign[stance]

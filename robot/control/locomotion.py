@@ -188,7 +188,9 @@ class LocomotionController:
         swing = self.walking.swing_leg()
         if swing is not None and float(np.sum(sensors.foot_forces[0 if swing == "left" else 1])) > SWING_FOOT_LOADED_N:
             swing = None  # a planned swing foot still (or already) on the ground pushes the body: do not level it
-        return self.balance.correct(targets, sensors.imu_quat, sensors.imu_gyro, swing)
+        # carrying something (the arm held out), the stance-leg levelling shook the hand: an apple slipped out of it
+        level = self.walking.ik.arms_down
+        return self.balance.correct(targets, sensors.imu_quat, sensors.imu_gyro, swing, level_stance=level)
 
     def overlay(self) -> GaitOverlay | None:
         """The walk in the world frame, placed by the current pose estimate; None while standing."""

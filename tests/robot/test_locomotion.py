@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from robot.control.balance import TrunkTilt
 from robot.control.gait import write_placo_model
 from robot.control.locomotion import Velocity, VelocityLimits, VelocityShaper
 from robot.control.stack import build_locomotion, measured_pose, sensors
@@ -79,6 +80,35 @@ def test_walks_a_20_s_script_upright_and_follows_it(tmp_path) -> None:
     assert np.hypot(estimate.x - truth[0], estimate.y - truth[1]) < 0.1
 
 
+def test_walking_keeps_the_trunk_upright_and_only_the_feet_on_the_floor(tmp_path) -> None:
+    """The trunk sagged towards the swinging leg in every single support (12 degrees peak to peak) and the hand on
+    the low side dragged on the floor in every walk; the stance leg now levels it at the hip."""
+    sim = MujocoSimBackend(open_floor())
+    loco = build_locomotion(sim, tmp_path, planner_process=False)
+    sim.reset(loco.stand_targets)
+    m = sim.read()
+    loco.reset_odometry(measured_pose(m), sensors(m))
+    model, data = sim.model, sim.data
+    feet = {model.body(name).id for name in humanoid_v1.FOOT_BODIES.values()}
+    floor = {g for g in range(model.ngeom) if model.geom_bodyid[g] == 0}
+    rolls, on_the_floor = [], set()
+    for velocity in (Velocity(vx=0.12), Velocity(vy=0.04), Velocity(yaw_rate=0.5), Velocity(vx=-0.08)):
+        loco.set_velocity(velocity)
+        for tick in range(400):
+            sim.write(loco.update(sensors(sim.read()), loco.stand_targets))
+            sim.step(DT)
+            for contact in data.contact[: data.ncon]:
+                if contact.geom1 in floor or contact.geom2 in floor:
+                    body = int(model.geom_bodyid[contact.geom2 if contact.geom1 in floor else contact.geom1])
+                    if body not in feet:
+                        on_the_floor.add(model.body(body).name)
+            if tick >= 100:  # under way
+                rolls.append(math.degrees(TrunkTilt.from_quat(sim.read().imu_quat).roll))
+    assert not sim.read().fallen
+    assert on_the_floor == set()
+    assert np.percentile(rolls, 99) - np.percentile(rolls, 1) < 5.0
+
+
 @pytest.mark.parametrize("vy", [0.05, -0.05])
 def test_sideways_walking_goes_the_commanded_way(tmp_path, vy: float) -> None:
     """Open loop this robot once drifted the wrong way sideways: the bar to beat."""
@@ -147,3 +177,26 @@ def test_a_tick_without_an_imu_reading_leaves_the_pose_and_the_balance_as_they_w
         sim.step(DT)
     after = loco.odometry.pose
     assert math.isfinite(after.x) and math.dist((after.x, after.y), (before.x, before.y)) < 0.02
+
+
+def test_the_stance_leg_is_levelled_only_with_the_arms_down(tmp_path) -> None:
+    """Carrying something (the arm held out) the stance-leg levelling shook the hand and an apple slipped out:
+    the levelling, tuned with the arms hanging down, is left out while they are not."""
+    from robot.control.balance import AnkleBalance
+    from robot.manipulation.grasp_plan import CARRY_ARM
+
+    ik = WholeBodyIK(write_placo_model(tmp_path), DT)
+    assert ik.arms_down
+    ik.set_upper_body({**humanoid_v1.stand_posture(), **CARRY_ARM})
+    assert not ik.arms_down
+    ik.set_upper_body(humanoid_v1.stand_posture())
+    assert ik.arms_down
+
+    sim = MujocoSimBackend(open_floor())
+    balance = AnkleBalance(sim.joint_axes())
+    targets = np.zeros(len(humanoid_v1.JOINT_NAMES))
+    tilted = np.array([math.cos(0.05), math.sin(0.05), 0.0, 0.0])  # rolled 0.1 rad
+    levelled = balance.correct(targets, tilted, np.zeros(3), "left")
+    left_alone = balance.correct(targets, tilted, np.zeros(3), "left", level_stance=False)
+    hip_roll = humanoid_v1.JOINT_NAMES.index("r_hip_roll")  # the right leg supports
+    assert abs(levelled[hip_roll]) > 0.1 and left_alone[hip_roll] == 0.0
