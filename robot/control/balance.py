@@ -8,8 +8,8 @@
 - Stance-leg levelling: the leg on the floor is turned at the hip (roll and pitch) against the trunk's measured
   tilt, so the trunk stays upright over the foot that carries it. Without it the trunk sagged towards the swinging
   leg in every single support, 12 degrees peak to peak, and the hand on the low side brushed the floor; with it
-  the sag is about 2 degrees (docs/design/walking.md, "Stance-leg levelling"). Only with the arms down: it was
-  tuned so, and with an arm held out carrying something it shook the hand.
+  the sag is about 2 degrees (docs/design/walking.md, "Stance-leg levelling"). Only with the arms at rest (the
+  standing posture's): it was tuned so, and with an arm held out carrying something it shook the hand.
 
 Signs come from each joint's axis in the model (a mirrored sign makes the robot fall), so left and right legs
 get the same physical correction.
@@ -82,8 +82,8 @@ class AnkleBalance:
         level_stance: bool = True,
     ) -> np.ndarray:
         """Targets with the ankle correction (and, while a leg swings, both legs' levelling) added; a new array.
-        `level_stance` False leaves the supporting leg to the ankles (the arms not hanging down: see
-        `WholeBodyIK.arms_down`).
+        `level_stance` False leaves the supporting leg to the ankles (the arms not at rest: see
+        `WholeBodyIK.arms_at_rest`).
         Without an IMU reading (NaN: a real robot's IMU missed a tick) there is nothing to correct by: unchanged."""
         if not (np.isfinite(quat_wxyz).all() and np.isfinite(gyro).all()):
             return np.array(targets, dtype=float)

@@ -189,7 +189,7 @@ class LocomotionController:
         if swing is not None and float(np.sum(sensors.foot_forces[0 if swing == "left" else 1])) > SWING_FOOT_LOADED_N:
             swing = None  # a planned swing foot still (or already) on the ground pushes the body: do not level it
         # carrying something (the arm held out), the stance-leg levelling shook the hand: an apple slipped out of it
-        level = self.walking.ik.arms_down
+        level = self.walking.ik.arms_at_rest
         return self.balance.correct(targets, sensors.imu_quat, sensors.imu_gyro, swing, level_stance=level)
 
     def overlay(self) -> GaitOverlay | None:

@@ -23,8 +23,9 @@ _SIDE_NAMES = {1: "left", 2: "right"}
 # Upper-body joints the soft joint task holds while walking (legs are solved from the feet and CoM tasks).
 UPPER_BODY_JOINTS = tuple(n for n in humanoid_v1.JOINT_NAMES if n not in humanoid_v1.LEG_JOINTS)
 ARM_JOINTS = tuple(n for n in UPPER_BODY_JOINTS if not n.startswith("head") and n not in humanoid_v1.GRIPPER_JOINTS)
-# The arms count as hanging down (the posture the stance-leg levelling was tuned with) within this of it (rad).
-ARMS_DOWN_TOLERANCE_RAD = 0.05
+# The arms count as at rest (the standing posture's, which the stance-leg levelling was tuned with) within this of
+# it (rad).
+ARMS_AT_REST_TOLERANCE_RAD = 0.05
 
 
 class WholeBodyIK:
@@ -47,11 +48,11 @@ class WholeBodyIK:
         self.reset_standing()
 
     def set_upper_body(self, posture: dict[str, float]) -> None:
-        """Arms, wrists, grippers and head to hold while walking (arms down, or carrying something)."""
+        """Arms, wrists, grippers and head to hold while walking (at rest, or carrying something)."""
         self._upper = {n: float(posture[n]) for n in UPPER_BODY_JOINTS}
         self.upper_body.set_joints(self._upper)
         stand = humanoid_v1.stand_posture()
-        self.arms_down = all(abs(self._upper[n] - stand[n]) <= ARMS_DOWN_TOLERANCE_RAD for n in ARM_JOINTS)
+        self.arms_at_rest = all(abs(self._upper[n] - stand[n]) <= ARMS_AT_REST_TOLERANCE_RAD for n in ARM_JOINTS)
 
     def reset_standing(self) -> np.ndarray:
         """Standing pose at the origin of the planner's frame (where every walk starts); returns its targets."""

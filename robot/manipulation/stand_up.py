@@ -12,6 +12,9 @@ from robot.model import humanoid_v1
 STAND_UP_S = 1.5
 REACHING_AHEAD_M = 0.15  # a hand this far ahead of the feet is reaching for something on a surface
 SWING_BACK = {"r_sho_pitch": 1.57, "r_sho_roll": 0.0, "r_el": 1.8, "r_wrist": -0.9}
+# The arm joints a move back to the standing posture sets (the wrist is already there): every one, so that the arms
+# end where walking expects them (`WholeBodyIK.arms_at_rest`).
+REST_ARM_JOINTS = ("r_sho_pitch", "r_sho_roll", "r_el", "l_sho_pitch", "l_sho_roll", "l_el")
 
 
 def _legs_to(targets: np.ndarray, duration_s: float) -> JointMove:
@@ -38,7 +41,7 @@ def arm_back_moves() -> list[Move]:
     return [
         JointMove({**SWING_BACK, "r_grip": 0.0}, 1.2, "swing back"),
         JointMove({"r_el": 0.0, "r_wrist": 0.0, "r_sho_pitch": 0.0}, 0.8, "unfold upright"),
-        JointMove({n: stand[n] for n in ("r_sho_roll", "l_sho_pitch", "l_sho_roll", "l_el")}, 0.8, "arms down"),
+        JointMove({n: stand[n] for n in REST_ARM_JOINTS}, 0.8, "arms to rest"),
     ]
 
 

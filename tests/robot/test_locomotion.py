@@ -179,18 +179,18 @@ def test_a_tick_without_an_imu_reading_leaves_the_pose_and_the_balance_as_they_w
     assert math.isfinite(after.x) and math.dist((after.x, after.y), (before.x, before.y)) < 0.02
 
 
-def test_the_stance_leg_is_levelled_only_with_the_arms_down(tmp_path) -> None:
+def test_the_stance_leg_is_levelled_only_with_the_arms_at_rest(tmp_path) -> None:
     """Carrying something (the arm held out) the stance-leg levelling shook the hand and an apple slipped out:
-    the levelling, tuned with the arms hanging down, is left out while they are not."""
+    the levelling, tuned with the arms at rest, is left out while they are not."""
     from robot.control.balance import AnkleBalance
     from robot.manipulation.grasp_plan import CARRY_ARM
 
     ik = WholeBodyIK(write_placo_model(tmp_path), DT)
-    assert ik.arms_down
+    assert ik.arms_at_rest
     ik.set_upper_body({**humanoid_v1.stand_posture(), **CARRY_ARM})
-    assert not ik.arms_down
+    assert not ik.arms_at_rest
     ik.set_upper_body(humanoid_v1.stand_posture())
-    assert ik.arms_down
+    assert ik.arms_at_rest
 
     sim = MujocoSimBackend(open_floor())
     balance = AnkleBalance(sim.joint_axes())
