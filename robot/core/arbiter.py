@@ -28,6 +28,10 @@ from robot.manipulation.stand_up import arm_back_moves, letting_go_out_in_front,
 
 # How fast the legs go from the walk's last posture to the standing one (rad/s): 0.34 rad in ~0.85 s when carrying.
 WALK_TO_STAND_SPEED_RAD_S = 0.4
+# How fast the joints go between the standing and crouching postures (rad/s, the fastest joint: the knees, 0.8 rad).
+# At the posture controller's 1.5 rad/s the robot rising from the crouch pitched 15 degrees and fell a second after
+# standing (the knees straightening in 0.5 s); at 0.8 it pitched 15 and stood; at 0.5, 12, and stood in 1.6 s.
+POSTURE_CHANGE_SPEED_RAD_S = 0.5
 
 
 class JointArbiter:
@@ -232,7 +236,9 @@ class JointArbiter:
             return "moving"
         return self._posture_name.value if self._posture_name is not None else "held"
 
-    def set_posture(self, posture: Posture, goal: np.ndarray, speed_rad_s: float | None = None) -> None:
+    def set_posture(
+        self, posture: Posture, goal: np.ndarray, speed_rad_s: float | None = POSTURE_CHANGE_SPEED_RAD_S
+    ) -> None:
         with self._lock:
             if posture == Posture.STAND and self._stand_up_from_reach():
                 return
@@ -245,7 +251,7 @@ class JointArbiter:
         with self._lock:
             if self._posture_name != Posture.STAND and not self._stand_up_from_reach():
                 self._posture_name = Posture.STAND
-                self._posture.move_to(self._stand)
+                self._posture.move_to(self._stand, POSTURE_CHANGE_SPEED_RAD_S)
 
     def begin_plan(self) -> None:
         """A new plan starts from the standing posture (a move, so only after an explicit command)."""
@@ -253,7 +259,7 @@ class JointArbiter:
             if self._stand_up_from_reach():
                 return  # (the plan's first body step waits for the arm to finish)
             self._posture_name = Posture.STAND
-            self._posture.move_to(self._stand)
+            self._posture.move_to(self._stand, POSTURE_CHANGE_SPEED_RAD_S)
 
     def _stand_up_from_reach(self) -> bool:
         """From a reach that was stopped (an e-stop, or a pick or place cancelled midway: its arm holds where it

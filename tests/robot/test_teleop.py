@@ -132,7 +132,12 @@ def test_crouch_and_stand_postures(make_worker) -> None:
     assert crouched.base_position[2] < stand_height - 0.02 and not crouched.fallen
     assert worker.submit(SetPosture(Posture.STAND)).accepted
     assert worker.wait_for(lambda s: s.locomotion.posture == "stand", 10.0)
-    assert worker.state().base_position[2] == pytest.approx(stand_height, abs=0.01)
+    # and stays standing: rising too fast, the robot pitched 15 degrees and fell a second after the legs got there
+    risen = worker.state().sim_time_s
+    assert worker.wait_for(lambda s: s.sim_time_s > risen + 1.5, 10.0)
+    standing = worker.state()
+    assert not standing.fallen and standing.tilt_deg < 5.0
+    assert standing.base_position[2] == pytest.approx(stand_height, abs=0.01)
 
 
 def test_a_fall_is_detected_reported_and_reset_puts_it_back_standing(make_worker) -> None:
