@@ -10,7 +10,7 @@ from pathlib import Path
 from sqlalchemy import event, select
 
 from app.sessions.models import CommandRow, EventRow
-from tests.app.test_api import wait_until
+from tests.app.test_api import plan_state, wait_until
 
 
 def store_status(client) -> dict:
@@ -59,8 +59,12 @@ def test_a_full_disk_is_said_and_nothing_recorded_meanwhile_is_lost(client) -> N
     event.listen(engine, "connect", full_disk)
     engine.dispose()
     try:
-        for n in range(3):
-            assert client.post("/api/commands", json={"text": f"say full disk {n}"}).status_code == 202
+        for n in range(3):  # each said before the next comes: a newer command supersedes a plan still running
+            text = f"say full disk {n}"
+            assert client.post("/api/commands", json={"text": text}).status_code == 202
+            wait_until(
+                lambda t=text: (p := plan_state(client)) and p["command_text"] == t and p["state"] == "succeeded"
+            )
         failing = wait_until(lambda: (s := store_status(client))["level_name"] != "OK" and s, timeout=20)
         assert "disk is full" in failing["message"]
         assert client.get("/api/health").status_code == 200 and client.runtime.worker.is_alive()
