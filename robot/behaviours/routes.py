@@ -9,7 +9,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from robot.model.world import GRID_RESOLUTION, WorldLayout, occupancy_grid
+from robot.model.world import GRID_RESOLUTION, WorldLayout, is_mat, occupancy_grid
 
 # A patrol's waypoint keeps this far from walls and furniture (the place's own staging point is only 26 cm from its
 # surface, and the dock's sits in a corner): room for the robot to turn and for its estimate to be off; less where
@@ -21,7 +21,6 @@ WAYPOINT_SHIFT_M = 0.4
 # off (patrols with the arms held back, tried at stop 63, rocked 11 degrees there, and one fell). The feet reach
 # this far from the trunk's centre (half a foot's length, and the hip's width).
 FEET_REACH_M = 0.15
-FLAT_HEIGHT_M = 0.01  # a piece of "furniture" no taller than this is a mat the robot walks on
 
 
 def nearest_first(start: tuple[float, float], points: Sequence[tuple[str, tuple[float, float]]]) -> list[str]:
@@ -66,7 +65,7 @@ def _mat_edges(layout: WorldLayout, shape: tuple[int, ...], x0: float, y0: float
         x0 + GRID_RESOLUTION * np.arange(shape[0]), y0 + GRID_RESOLUTION * np.arange(shape[1]), indexing="ij"
     )
     near = np.zeros(shape, dtype=bool)
-    for mat in (box for box in layout.furniture if box.height <= FLAT_HEIGHT_M):
+    for mat in (box for box in layout.furniture if is_mat(box)):
         dx, dy = np.abs(gx - mat.x), np.abs(gy - mat.y)
         outside = (dx <= mat.half_x + FEET_REACH_M) & (dy <= mat.half_y + FEET_REACH_M)
         deep_inside = (dx <= mat.half_x - FEET_REACH_M) & (dy <= mat.half_y - FEET_REACH_M)

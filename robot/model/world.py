@@ -148,6 +148,13 @@ KITCHEN_COUNTER = Box("kitchen_counter", 1.75, 0.55, 0.2, 0.7, 0.25, (0.55, 0.42
 LIVING_TABLE = Box("living_room_table", -1.2, 0.75, 0.3, 0.25, 0.2, (0.45, 0.3, 0.2, 1.0))
 # A charging mat flush with the floor (3 mm): the walking controller does not climb steps.
 DOCK_PAD = Box("charging_dock", -1.65, -1.15, 0.15, 0.15, 0.003, (0.2, 0.7, 0.9, 1.0))
+MAT_HEIGHT_M = 0.01  # a piece of "furniture" no taller than this is a mat the robot walks on
+
+
+def is_mat(box: Box) -> bool:
+    """A flat piece the robot walks onto (a foot landing on its edge or corner tilts: see `robot.skills.navigate`)."""
+    return box.height <= MAT_HEIGHT_M
+
 
 _OBJECT_SPECS = (
     # name, aliases, colour, shape, rgba, mass (kg), radius, height (m)

@@ -11,7 +11,7 @@ from robot.control.head import DEFAULT_TILT
 from robot.control.locomotion import Velocity, clip_velocity
 from robot.interface import NavigationState
 from robot.manipulation.grasp_plan import CARRY_HAND_AHEAD_M
-from robot.model.world import ROBOT_RADIUS, Place, WorldLayout
+from robot.model.world import ROBOT_RADIUS, Place, WorldLayout, is_mat
 from robot.navigation.costmap import Costmap
 from robot.navigation.follower import MAX_FORWARD_M_S
 from robot.navigation.goal import parse_pose_goal
@@ -20,6 +20,7 @@ from robot.navigation.navigator import (
     CLEARANCE_M,
     OPEN_M_S,
     NavigationFailed,
+    NavigationReport,
     Navigator,
     StopDrift,
 )
@@ -30,6 +31,28 @@ from robot.skills.body import BodyParts, Legs, Localiser, PerceptionView
 
 CARRY_CLEARANCE_M = 0.02  # between the carried object and a surface's edge, before turning away from it
 MIN_STEP_BACK_M = 0.04
+# A place on a mat (the dock's pad) is walked onto straight along its heading, from this far beyond the mat's edge
+# (the feet 10 cm off it): a path ending on the mat came at it aslant, a foot landed on its corner, the trunk tilted
+# 6-10 degrees and, with the arms held back, the robot fell backwards (tours to the dock on world 2: 2 of 6).
+MAT_ENTRY_M = 0.25
+
+
+def mat_entry(place: Place) -> tuple[float, float]:
+    """Where the walk onto a place on a mat starts: in line with its approach pose, `MAT_ENTRY_M` beyond the mat's
+    edge along the pose's heading (the robot walks back onto it, both feet crossing the edge squarely)."""
+    mat = place.surface
+    assert mat is not None
+    x, y, yaw = place.approach
+    direction = (math.cos(yaw), math.sin(yaw))
+    # how far the pose's heading runs from the pose to the mat's edge
+    to_edge = min(
+        (centre + math.copysign(half, d) - p) / d
+        for centre, half, p, d in ((mat.x, mat.half_x, x, direction[0]), (mat.y, mat.half_y, y, direction[1]))
+        if abs(d) > 1e-9
+    )
+    reach = max(to_edge, 0.0) + MAT_ENTRY_M
+    return round(x + reach * direction[0], 3), round(y + reach * direction[1], 3)
+
 
 # Where to stop at a place (x, y, heading), and whether a stop short of it will do for the work there (asked at
 # each stop), for the step after the walk.
@@ -125,6 +148,24 @@ class NavigateSkill:
         clock = self._parts.clock
         return Navigator(self.legs_and_map(ctx), clock.now, self.set_navigation, self._stop_drift, clearance, speed)
 
+    def _onto_mat(
+        self,
+        navigator: Navigator,
+        place: Place,
+        stance: tuple[float, float, float],
+        in_reach: Callable[[], bool],
+        ctx: ExecutionContext,
+    ) -> NavigationReport:
+        """To the mat's entry (`mat_entry`), stopped there and turned to the place's heading, then straight onto
+        `stance`: walking on without the stop, the robot came onto the pad still turning, 30-40 degrees aslant."""
+        entry = mat_entry(place)
+        report = navigator.go(entry, (*entry, stance[2]), back_away_m=self.back_away_m(ctx))
+        last = navigator.step_to(stance, good_stop=in_reach)
+        report.walked_m += last.walked_m
+        report.sim_s += last.sim_s
+        report.final_error_m, report.final_heading_error_deg = last.final_error_m, last.final_heading_error_deg
+        return report
+
     def navigate_to(self, args: dict[str, str], ctx: ExecutionContext) -> str:
         """Walk to a named place: a planned path to the open floor in front of it, then a short precise
         approach."""
@@ -157,7 +198,10 @@ class NavigateSkill:
                     good_stop = work[0]
                     return good_stop is not None and good_stop()
 
-                report = navigator.go(place.staging, work_pose, in_reach, self.back_away_m(ctx))
+                if place.surface is not None and is_mat(place.surface):
+                    report = self._onto_mat(navigator, place, work_pose(), in_reach, ctx)
+                else:
+                    report = navigator.go(place.staging, work_pose, in_reach, self.back_away_m(ctx))
         except NavigationFailed as exc:
             raise StepFailed(str(exc)) from exc
         finally:
