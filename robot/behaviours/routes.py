@@ -9,7 +9,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from robot.model.world import GRID_RESOLUTION, WorldLayout, is_mat, occupancy_grid
+from robot.model.world import GRID_RESOLUTION, WorldLayout, is_mat, near_mat_edges, occupancy_grid
 
 # A patrol's waypoint keeps this far from walls and furniture (the place's own staging point is only 26 cm from its
 # surface, and the dock's sits in a corner): room for the robot to turn and for its estimate to be off; less where
@@ -18,9 +18,8 @@ WAYPOINT_CLEARANCES_M = (0.45, 0.38, 0.3)
 WAYPOINT_SHIFT_M = 0.4
 # ... and keeps the feet off the edge of a mat on the floor (the dock's pad, 3 mm): the dock's waypoint sat on the
 # pad's corner in 10 of 12 worlds, where the robot turns towards the next waypoint with one foot on the pad and one
-# off (patrols with the arms held back, tried at stop 63, rocked 11 degrees there, and one fell). The feet reach
-# this far from the trunk's centre (half a foot's length, and the hip's width).
-FEET_REACH_M = 0.15
+# off (patrols with the arms held back, tried at stop 63, rocked 11 degrees there, and one fell): no waypoint
+# within `FEET_REACH_M` of a mat's edge.
 
 
 def nearest_first(start: tuple[float, float], points: Sequence[tuple[str, tuple[float, float]]]) -> list[str]:
@@ -60,14 +59,8 @@ def open_floor_near(layout: WorldLayout, point: tuple[float, float], clearance_m
 
 def _mat_edges(layout: WorldLayout, shape: tuple[int, ...], x0: float, y0: float) -> np.ndarray:
     """The cells of the occupancy grid (`shape`, from `x0`, `y0`) where a standing robot would have a foot on a
-    mat's edge: within FEET_REACH_M of it, on or off the mat."""
+    mat's edge."""
     gx, gy = np.meshgrid(
         x0 + GRID_RESOLUTION * np.arange(shape[0]), y0 + GRID_RESOLUTION * np.arange(shape[1]), indexing="ij"
     )
-    near = np.zeros(shape, dtype=bool)
-    for mat in (box for box in layout.furniture if is_mat(box)):
-        dx, dy = np.abs(gx - mat.x), np.abs(gy - mat.y)
-        outside = (dx <= mat.half_x + FEET_REACH_M) & (dy <= mat.half_y + FEET_REACH_M)
-        deep_inside = (dx <= mat.half_x - FEET_REACH_M) & (dy <= mat.half_y - FEET_REACH_M)
-        near |= outside & ~deep_inside
-    return near
+    return near_mat_edges((box for box in layout.furniture if is_mat(box)), gx, gy)

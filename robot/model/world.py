@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -149,11 +150,24 @@ LIVING_TABLE = Box("living_room_table", -1.2, 0.75, 0.3, 0.25, 0.2, (0.45, 0.3, 
 # A charging mat flush with the floor (3 mm): the walking controller does not climb steps.
 DOCK_PAD = Box("charging_dock", -1.65, -1.15, 0.15, 0.15, 0.003, (0.2, 0.7, 0.9, 1.0))
 MAT_HEIGHT_M = 0.01  # a piece of "furniture" no taller than this is a mat the robot walks on
+FEET_REACH_M = 0.15  # how far the feet reach from the trunk's centre, standing (half a foot's length, the hips' width)
 
 
 def is_mat(box: Box) -> bool:
     """A flat piece the robot walks onto (a foot landing on its edge or corner tilts: see `robot.skills.navigate`)."""
     return box.height <= MAT_HEIGHT_M
+
+
+def near_mat_edges(mats: Iterable[Box], x: np.ndarray, y: np.ndarray, reach_m: float = FEET_REACH_M) -> np.ndarray:
+    """Where (element-wise over the coordinate arrays `x`, `y`) a robot standing would have a foot on a mat's edge:
+    within `reach_m` of it, on or off the mat."""
+    near = np.zeros(np.broadcast_shapes(x.shape, y.shape), dtype=bool)
+    for mat in mats:
+        dx, dy = np.abs(x - mat.x), np.abs(y - mat.y)
+        around = (dx <= mat.half_x + reach_m) & (dy <= mat.half_y + reach_m)
+        deep_inside = (dx <= mat.half_x - reach_m) & (dy <= mat.half_y - reach_m)
+        near |= around & ~deep_inside
+    return near
 
 
 _OBJECT_SPECS = (

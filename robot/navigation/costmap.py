@@ -29,6 +29,16 @@ class Costmap:
         occupied = data >= OCCUPIED_PERCENT
         return Costmap(inflate(occupied, inflate_m / grid.resolution), grid.origin[0], grid.origin[1], grid.resolution)
 
+    def centres(self) -> tuple[np.ndarray, np.ndarray]:
+        """The x and y of every cell's centre, as two arrays shaped like `blocked`."""
+        nx, ny = self.blocked.shape
+        xs, ys = self.x0 + (np.arange(nx) + 0.5) * self.resolution, self.y0 + (np.arange(ny) + 0.5) * self.resolution
+        return np.meshgrid(xs, ys, indexing="ij")  # type: ignore[return-value]
+
+    def also_blocked(self, cells: np.ndarray) -> Costmap:
+        """This costmap with `cells` (a bool array shaped like `blocked`) blocked too."""
+        return Costmap(self.blocked | cells, self.x0, self.y0, self.resolution)
+
     def cell(self, x: float, y: float) -> tuple[int, int]:
         return int(np.floor((x - self.x0) / self.resolution)), int(np.floor((y - self.y0) / self.resolution))
 

@@ -11,10 +11,10 @@ from robot.control.head import DEFAULT_TILT
 from robot.control.locomotion import Velocity, clip_velocity
 from robot.interface import NavigationState
 from robot.manipulation.grasp_plan import CARRY_HAND_AHEAD_M
-from robot.model.world import ROBOT_RADIUS, Place, WorldLayout, is_mat
+from robot.model.world import FEET_REACH_M, ROBOT_RADIUS, Box, Place, WorldLayout, is_mat, near_mat_edges
 from robot.navigation.costmap import Costmap
 from robot.navigation.follower import MAX_FORWARD_M_S
-from robot.navigation.goal import parse_pose_goal
+from robot.navigation.goal import PoseGoal, parse_pose_goal
 from robot.navigation.navigator import (
     CARRYING_CLEARANCE_M,
     CLEARANCE_M,
@@ -34,18 +34,27 @@ MIN_STEP_BACK_M = 0.04
 # A place on a mat (the dock's pad) is walked onto straight along its heading, from this far beyond the mat's edge
 # (the feet 10 cm off it): a path ending on the mat came at it aslant, a foot landed on its corner and the trunk
 # tilted 7-8 degrees (with the arms held back, tried at stop 64, the robot then fell backwards: tours to the dock on
-# world 2, 2 of 6).
-MAT_ENTRY_M = 0.25
+# world 2, 2 of 6). The stop there can end 10 cm past it, still turning (world 2, 1 of 4 runs at 0.25 m): that far
+# leaves the feet clear of the edge all the same.
+MAT_ENTRY_M = 0.35
+# Paths keep the robot's centre this far from a mat's edge (on it or off it): the feet reach `FEET_REACH_M`, and a
+# path along the pad's edge to its entry turned in place 10 cm off the edge (a typed pose on the dock, world 2).
+MAT_EDGE_KEEP_OFF_M = FEET_REACH_M + 0.05
 
 
 def mat_entry(place: Place) -> tuple[float, float]:
     """Where the walk onto a place on a mat starts: in line with its approach pose, `MAT_ENTRY_M` beyond the mat's
     edge along the pose's heading (the robot walks back onto it, both feet crossing the edge squarely)."""
-    mat = place.surface
-    assert mat is not None
+    assert place.surface is not None
     x, y, yaw = place.approach
+    return entry_along(place.surface, x, y, yaw)
+
+
+def entry_along(mat: Box, x: float, y: float, yaw: float) -> tuple[float, float]:
+    """The point `MAT_ENTRY_M` beyond the mat's edge, from (x, y) along `yaw`: a walk between it and (x, y) crosses
+    the edge in line with `yaw`."""
     direction = (math.cos(yaw), math.sin(yaw))
-    # how far the pose's heading runs from the pose to the mat's edge
+    # how far the heading runs from the pose to the mat's edge
     to_edge = min(
         (centre + math.copysign(half, d) - p) / d
         for centre, half, p, d in ((mat.x, mat.half_x, x, direction[0]), (mat.y, mat.half_y, y, direction[1]))
@@ -55,37 +64,66 @@ def mat_entry(place: Place) -> tuple[float, float]:
     return round(x + reach * direction[0], 3), round(y + reach * direction[1], 3)
 
 
+def mat_under(layout: WorldLayout, x: float, y: float) -> Box | None:
+    """The mat a robot standing at (x, y) would have a foot on or beside (within `FEET_REACH_M` of it), if any."""
+    return next((box for box in layout.furniture if is_mat(box) and box.contains(x, y, FEET_REACH_M)), None)
+
+
+def pose_entries(mat: Box, x: float, y: float, yaw: float | None) -> list[tuple[tuple[float, float], float]]:
+    """Ways onto a pose on a mat, each an entry point and the heading kept from it to the pose: with a heading,
+    walking back onto the pose from ahead of it or on from behind it; without one, walking on squarely across any
+    of the mat's four edges."""
+    if yaw is not None:
+        return [(entry_along(mat, x, y, yaw), yaw), (entry_along(mat, x, y, yaw + math.pi), yaw)]
+    return [
+        (entry_along(mat, x, y, heading + math.pi), heading) for heading in (0.0, math.pi / 2, math.pi, -math.pi / 2)
+    ]
+
+
 # Where to stop at a place (x, y, heading), and whether a stop short of it will do for the work there (asked at
 # each stop), for the step after the walk.
 WorkPose = Callable[[Place, ExecutionContext], tuple[tuple[float, float, float], Callable[[], bool] | None]]
 
 
 class LegsAndMap:
-    """The legs and the map as navigation uses them (the navigator's `NavBody`), in simulated time."""
+    """The legs and the map as navigation uses them (the navigator's `NavBody`), in simulated time. Paths keep off
+    the edges of the `mats` (the lidar does not see a 3 mm pad; the layout knows it): walking past the dock's pad, a
+    foot could land on its edge."""
 
     def __init__(
-        self, legs: Legs, localiser: Localiser, perception: PerceptionView | None, ctx: ExecutionContext
+        self,
+        legs: Legs,
+        localiser: Localiser,
+        perception: PerceptionView | None,
+        ctx: ExecutionContext,
+        mats: tuple[Box, ...] = (),
     ) -> None:
         self._legs = legs
         self._localiser = localiser
         self._perception = perception
         self._ctx = ctx
+        self._mats = mats
         self._scans = -1  # the map the costmaps below were grown from
-        self._costmaps: dict[float, Costmap] = {}  # by inflation: navigation asks for a few each scan
+        self._costmaps: dict[tuple[float, bool], Costmap] = {}  # navigation asks for a few each scan
 
     def pose(self) -> tuple[float, float, float]:
         position, rotation = self._localiser.map_trunk()
         return float(position[0]), float(position[1]), yaw_of(rotation)
 
-    def costmap(self, inflate_m: float) -> Costmap | None:
+    def costmap(self, inflate_m: float, off_mat_edges: bool = True) -> Costmap | None:
+        """The map's obstacles grown by `inflate_m`, and (`off_mat_edges`) where a foot would be on a mat's edge."""
         grid = self._perception.feed().map if self._perception is not None else None
         if grid is None:
             return None
         if grid.scans != self._scans:
             self._scans, self._costmaps = grid.scans, {}
-        if inflate_m not in self._costmaps:
-            self._costmaps[inflate_m] = Costmap.from_map(grid, inflate_m)
-        return self._costmaps[inflate_m]
+        key = (inflate_m, off_mat_edges and bool(self._mats))
+        if key not in self._costmaps:
+            costmap = Costmap.from_map(grid, inflate_m)
+            if key[1]:
+                costmap = costmap.also_blocked(near_mat_edges(self._mats, *costmap.centres(), MAT_EDGE_KEEP_OFF_M))
+            self._costmaps[key] = costmap
+        return self._costmaps[key]
 
     def drive(self, vx: float, vy: float, yaw_rate: float) -> None:
         self._legs.drive(clip_velocity(Velocity(vx, vy, yaw_rate), self._legs.limits))
@@ -138,7 +176,8 @@ class NavigateSkill:
 
     def legs_and_map(self, ctx: ExecutionContext) -> LegsAndMap:
         p = self._parts
-        return LegsAndMap(p.legs, p.localiser, p.perception, ctx)
+        mats = tuple(box for box in self._layout.furniture if is_mat(box))
+        return LegsAndMap(p.legs, p.localiser, p.perception, ctx, mats)
 
     def navigator(self, ctx: ExecutionContext) -> Navigator:
         """A navigator on this robot's legs and map, sharing what its stops have taught (`StopDrift`), keeping a
@@ -152,20 +191,35 @@ class NavigateSkill:
     def _onto_mat(
         self,
         navigator: Navigator,
-        place: Place,
+        entry: tuple[float, float],
         stance: tuple[float, float, float],
-        in_reach: Callable[[], bool],
+        in_reach: Callable[[], bool] | None,
         ctx: ExecutionContext,
     ) -> NavigationReport:
-        """To the mat's entry (`mat_entry`), stopped there and turned to the place's heading, then straight onto
-        `stance`: walking on without the stop, the robot came onto the pad still turning, 30-40 degrees aslant."""
-        entry = mat_entry(place)
+        """To the mat's `entry`, stopped there and turned to the stance's heading, then straight onto `stance`:
+        walking on without the stop, the robot came onto the pad still turning, 30-40 degrees aslant."""
         report = navigator.go(entry, (*entry, stance[2]), back_away_m=self.back_away_m(ctx))
         last = navigator.step_to(stance, good_stop=in_reach)
         report.walked_m += last.walked_m
         report.sim_s += last.sim_s
         report.final_error_m, report.final_heading_error_deg = last.final_error_m, last.final_heading_error_deg
         return report
+
+    def _way_onto_mat(self, pose: PoseGoal, ctx: ExecutionContext) -> tuple[tuple[float, float], float] | None:
+        """For a pose on a mat or beside it (a foot would land on its edge): the entry and heading of the way onto
+        it nearest the robot, among those clear on the map (`pose_entries`); None for a pose away from mats."""
+        mat = mat_under(self._layout, pose.x, pose.y)
+        if mat is None:
+            return None
+        body = self.legs_and_map(ctx)
+        costmap = body.costmap(ROBOT_RADIUS, off_mat_edges=False)
+        ways = [
+            (entry, heading)
+            for entry, heading in pose_entries(mat, pose.x, pose.y, pose.yaw)
+            if costmap is None or _clear_line(costmap, entry, (pose.x, pose.y))
+        ]
+        here = body.pose()[:2]
+        return min(ways, key=lambda way: math.dist(way[0], here), default=None)
 
     def navigate_to(self, args: dict[str, str], ctx: ExecutionContext) -> str:
         """Walk to a named place: a planned path to the open floor in front of it, then a short precise
@@ -181,11 +235,16 @@ class NavigateSkill:
         try:
             navigator = self.navigator(ctx)
             if pose is not None:  # a pose on the map: walk there, then turn to its heading if it has one
-                costmap = self.legs_and_map(ctx).costmap(ROBOT_RADIUS)
+                costmap = self.legs_and_map(ctx).costmap(ROBOT_RADIUS, off_mat_edges=False)
                 if costmap is not None and costmap.blocked_at(pose.x, pose.y):
                     raise StepFailed(f"unreachable: ({pose.text()}) is in or against an obstacle on the map")
-                final = None if pose.yaw is None else (pose.x, pose.y, pose.yaw)
-                report = navigator.go((pose.x, pose.y), final, back_away_m=self.back_away_m(ctx))
+                way = self._way_onto_mat(pose, ctx)
+                if way is not None:  # squarely onto the mat, as for a place on it
+                    entry, heading = way
+                    report = self._onto_mat(navigator, entry, (pose.x, pose.y, heading), None, ctx)
+                else:
+                    final = None if pose.yaw is None else (pose.x, pose.y, pose.yaw)
+                    report = navigator.go((pose.x, pose.y), final, back_away_m=self.back_away_m(ctx))
             else:
                 assert place is not None
                 # whether a stop will do for the work there, by the latest answer (the navigator asks on the way)
@@ -200,7 +259,7 @@ class NavigateSkill:
                     return good_stop is not None and good_stop()
 
                 if place.surface is not None and is_mat(place.surface):
-                    report = self._onto_mat(navigator, place, work_pose(), in_reach, ctx)
+                    report = self._onto_mat(navigator, mat_entry(place), work_pose(), in_reach, ctx)
                 else:
                     report = navigator.go(place.staging, work_pose, in_reach, self.back_away_m(ctx))
         except NavigationFailed as exc:
@@ -231,6 +290,15 @@ class NavigateSkill:
         if self._parts.arm.held is None:
             return 0.0
         return carry_back_away_m(self._layout, self.legs_and_map(ctx).pose())
+
+
+def _clear_line(costmap: Costmap, start: tuple[float, float], end: tuple[float, float]) -> bool:
+    """Whether the straight walk from `start` to `end` keeps clear of everything on the costmap."""
+    steps = max(1, math.ceil(math.dist(start, end) / (costmap.resolution / 2)))
+    return not any(
+        costmap.blocked_at(start[0] + (end[0] - start[0]) * k / steps, start[1] + (end[1] - start[1]) * k / steps)
+        for k in range(steps + 1)
+    )
 
 
 def carry_back_away_m(layout: WorldLayout, pose: tuple[float, float, float]) -> float:

@@ -4,16 +4,19 @@ back as tried at stop 64, then fell backwards)."""
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import replace
 
+import numpy as np
 import pytest
 
-from robot.behaviours.routes import FEET_REACH_M
 from robot.interface import ExecutePlan, PlanState
-from robot.model.world import DOCK_PAD, generate_world
+from robot.model.world import DOCK_PAD, FEET_REACH_M, generate_world, near_mat_edges
+from robot.navigation.costmap import Costmap
+from robot.navigation.navigator import plan_path
 from robot.sim.backend import MujocoSimBackend
-from robot.skills.navigate import MAT_ENTRY_M, mat_entry
+from robot.skills.navigate import MAT_EDGE_KEEP_OFF_M, MAT_ENTRY_M, mat_entry, mat_under, pose_entries
 from robot.worker import RobotWorker
 
 
@@ -50,12 +53,50 @@ def test_a_pose_turned_on_the_mat_is_entered_along_its_own_heading() -> None:
     assert _beyond_edge(back) == pytest.approx(0.0, abs=2e-3) and _beyond_edge(_step(back, yaw, 0.01)) > 0.0
 
 
-def test_the_robot_walks_onto_the_dock_squarely_and_stands_on_it() -> None:
-    """World 2: the path from the start comes at the pad from its north-east corner; the robot must only come near
-    the pad (a foot within reach of its edge) in line with the dock's heading, turned to it (walking on from the
-    path without a stop, it came onto the pad 30-40 degrees aslant)."""
+def test_a_pose_on_or_beside_a_mat_is_found_on_it_and_one_clear_of_it_is_not() -> None:
     layout = generate_world(2)
-    dock = next(p for p in layout.places if p.name == "charging dock")
+    assert mat_under(layout, DOCK_PAD.x, DOCK_PAD.y) == DOCK_PAD
+    beside = DOCK_PAD.x + DOCK_PAD.half_x + FEET_REACH_M - 0.01  # a foot would land on the pad's edge
+    assert mat_under(layout, beside, DOCK_PAD.y) == DOCK_PAD
+    assert mat_under(layout, beside + 0.05, DOCK_PAD.y) is None
+
+
+@pytest.mark.parametrize("yaw_deg", [90.0, 30.0])
+def test_a_pose_with_a_heading_is_entered_in_line_with_it_from_ahead_or_from_behind(yaw_deg: float) -> None:
+    yaw = math.radians(yaw_deg)
+    pose = (DOCK_PAD.x + 0.03, DOCK_PAD.y - 0.04)
+    (ahead, ahead_heading), (behind, behind_heading) = pose_entries(DOCK_PAD, *pose, yaw)
+    assert ahead_heading == behind_heading == yaw  # the robot keeps the pose's heading onto it, both ways
+    assert math.atan2(ahead[1] - pose[1], ahead[0] - pose[0]) == pytest.approx(yaw, abs=0.01)
+    assert math.atan2(pose[1] - behind[1], pose[0] - behind[0]) == pytest.approx(yaw, abs=0.01)
+    assert _beyond_edge(ahead) > 0.0 and _beyond_edge(behind) > 0.0
+
+
+def test_a_pose_without_a_heading_can_be_entered_squarely_across_each_edge() -> None:
+    pose = (DOCK_PAD.x - 0.02, DOCK_PAD.y + 0.05)
+    ways = pose_entries(DOCK_PAD, *pose, None)
+    assert sorted(round(math.degrees(h)) % 360 for _, h in ways) == [0, 90, 180, 270]
+    for entry, heading in ways:  # walking forwards onto the pose, across an edge at right angles
+        assert math.atan2(pose[1] - entry[1], pose[0] - entry[0]) == pytest.approx(heading, abs=0.01)
+        back = _step(entry, heading, MAT_ENTRY_M)
+        assert _beyond_edge(back) == pytest.approx(0.0, abs=2e-3) and _beyond_edge(entry) > MAT_ENTRY_M - 0.01
+
+
+def test_a_path_past_the_pad_keeps_the_feet_off_its_edge() -> None:
+    """From east of the pad to north of it, the shortest way hugs the pad's corner; the path keeps the feet clear."""
+    room = Costmap(np.zeros((80, 60), dtype=bool), -2.0, -1.5, 0.05)
+    costmap = room.also_blocked(near_mat_edges([DOCK_PAD], *room.centres(), MAT_EDGE_KEEP_OFF_M))
+    assert not costmap.blocked_at(*mat_entry(_dock()))  # where the walk onto the pad starts stays open
+    path = plan_path(costmap, (-1.1, -1.2), (-1.7, -0.7))
+    along = [p for a, b in itertools.pairwise(path) for p in np.linspace(a, b, 20)]
+    assert min(_beyond_edge(tuple(p)) for p in along) >= FEET_REACH_M
+    assert not any(costmap.blocked_at(*p) for p in along)
+
+
+def _walk_near_the_pad(seed: int, target: str):
+    """Walk to `target` on world `seed`; the final state, and where the robot was (x, y, estimated yaw) while off
+    the pad with a foot within reach of its edge."""
+    layout = generate_world(seed)
     worker = RobotWorker(layout, backend=MujocoSimBackend(layout), realtime=False)
     worker.start()
     near_pad: list[tuple[float, float, float]] = []
@@ -66,17 +107,40 @@ def test_the_robot_walks_onto_the_dock_squarely_and_stands_on_it() -> None:
         return state.plan is not None and state.plan.state != PlanState.RUNNING
 
     try:
-        steps = [{"action": "navigate_to", "args": {"target": "charging dock"}}]
+        steps = [{"action": "navigate_to", "args": {"target": target}}]
         assert worker.submit(ExecutePlan({"steps": steps})).accepted
         assert worker.wait_for(ended, 400)
-        state = worker.state()
-        assert state.plan.state == PlanState.SUCCEEDED, state.plan.steps[0].detail
-        assert not state.fallen
-        assert math.dist(state.base_position[:2], dock.approach[:2]) < 0.1  # the truth: on the pad
-        assert near_pad
-        # near the pad, only on its side facing the room and in line with the dock, never by its corners
-        east_edge = DOCK_PAD.x + DOCK_PAD.half_x
-        assert all(x > east_edge and abs(y - dock.approach[1]) < 0.08 for x, y, _ in near_pad), near_pad
-        assert all(abs(math.degrees(yaw)) < 12.0 for *_, yaw in near_pad), near_pad
+        return worker.state(), near_pad
     finally:
         worker.stop()
+
+
+def test_the_robot_walks_onto_the_dock_squarely_and_stands_on_it() -> None:
+    """World 2: the path from the start comes at the pad from its north-east corner; the robot must only come near
+    the pad (a foot within reach of its edge) in line with the dock's heading, turned to it (walking on from the
+    path without a stop, it came onto the pad 30-40 degrees aslant)."""
+    dock = _dock(2)
+    state, near_pad = _walk_near_the_pad(2, "charging dock")
+    assert state.plan.state == PlanState.SUCCEEDED, state.plan.steps[0].detail
+    assert not state.fallen
+    assert math.dist(state.base_position[:2], dock.approach[:2]) < 0.1  # the truth: on the pad
+    assert near_pad
+    # near the pad, only on its side facing the room and in line with the dock, never by its corners
+    east_edge = DOCK_PAD.x + DOCK_PAD.half_x
+    assert all(x > east_edge and abs(y - dock.approach[1]) < 0.08 for x, y, _ in near_pad), near_pad
+    assert all(abs(math.degrees(yaw)) < 12.0 for *_, yaw in near_pad), near_pad
+
+
+def test_a_pose_typed_on_the_dock_is_walked_onto_squarely_along_its_heading() -> None:
+    """A pose on the pad facing north (+y), typed rather than the place: the robot comes onto the pad from the
+    north (south of it is the wall), in line with the pose and turned to its heading, as for the place (a foot landing
+    on the pad's edge tipped the robot over with its arms held back: stop 65's fresh-clone CI)."""
+    target = f"{DOCK_PAD.x:.2f}, {DOCK_PAD.y:.2f}, 90 deg"
+    state, near_pad = _walk_near_the_pad(2, target)
+    assert state.plan.state == PlanState.SUCCEEDED, state.plan.steps[0].detail
+    assert not state.fallen
+    assert math.dist(state.base_position[:2], (DOCK_PAD.x, DOCK_PAD.y)) < 0.1
+    assert near_pad
+    north_edge = DOCK_PAD.y + DOCK_PAD.half_y
+    assert all(y > north_edge and abs(x - DOCK_PAD.x) < 0.08 for x, y, _ in near_pad), near_pad
+    assert all(abs(math.degrees(yaw) - 90.0) < 12.0 for *_, yaw in near_pad), near_pad

@@ -8,8 +8,8 @@ from dataclasses import replace
 
 import pytest
 
-from robot.behaviours.routes import FEET_REACH_M, WAYPOINT_SHIFT_M, waypoint_near
-from robot.model.world import DOCK_PAD, generate_world
+from robot.behaviours.routes import WAYPOINT_SHIFT_M, waypoint_near
+from robot.model.world import DOCK_PAD, FEET_REACH_M, generate_world
 
 
 def _distance_to_edge(point: tuple[float, float]) -> float:
