@@ -130,6 +130,9 @@ class ArmMotion:
     def trunk_in_feet(self, joints: np.ndarray) -> np.ndarray:
         return self._ik.trunk_in_feet(joints)
 
+    def trunk_ahead_of_com(self, joints: np.ndarray) -> np.ndarray:
+        return self._ik.trunk_ahead_of_com(joints)
+
     def update(self, measured_joints: np.ndarray) -> np.ndarray:
         """Joint targets for this tick."""
         with self._lock:

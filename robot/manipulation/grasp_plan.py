@@ -43,9 +43,20 @@ EMPTY_GRIP_M = 0.004
 
 @dataclass(frozen=True)
 class Stance:
+    """Where the feet stand (their centre, map frame) and which way they face: the reach is measured from them."""
+
     x: float
     y: float
     yaw: float
+
+
+def trunk_pose_at(stance: Stance, trunk_ahead: np.ndarray) -> tuple[float, float, float]:
+    """The trunk's pose (what walking steers) with the feet at `stance`, the trunk `trunk_ahead` (x, y; feet frame)
+    from the feet's centre: steering the trunk onto the stance itself left the mug 3.5 cm beyond the reach window
+    with the arms held back (the trunk stands 3.5 cm ahead of the feet to balance them)."""
+    c, s = math.cos(stance.yaw), math.sin(stance.yaw)
+    dx, dy = float(trunk_ahead[0]), float(trunk_ahead[1])
+    return stance.x + c * dx - s * dy, stance.y + s * dx + c * dy, stance.yaw
 
 
 def grasp_stance(
@@ -69,11 +80,12 @@ def grasp_stance(
     return stance
 
 
-# Where the robot's feet, shins and hanging hands are, around a stance (stance frame, m: x ahead, y to the left):
-# the hands hang 0.2 m out to the sides, low. Nothing on the map may be there (the last steps onto a stance are
-# walked without the map: at world seed 0 the robot pushed a chair for 30 s trying to stand where it stood).
-STANCE_FOOTPRINT_X = (-0.12, 0.08)
-STANCE_FOOTPRINT_Y = (-0.22, 0.22)
+# Where the robot's feet, shins and hands at rest are, around a stance (stance frame, m: x ahead, y to the left):
+# the hands held back reach 0.2 m behind the trunk and 0.15 m out to the sides. Nothing on the map may be there (the
+# last steps onto a stance are walked without the map: at world seed 0 the robot pushed a chair for 30 s trying to
+# stand where it stood).
+STANCE_FOOTPRINT_X = (-0.2, 0.08)
+STANCE_FOOTPRINT_Y = (-0.18, 0.18)
 # Other places of the object in the feet frame, inside the reach window with REACH_MARGIN_M to spare, nearest the
 # usual one first: where to stand instead when something stands on the usual stance.
 SHIFTED_OFFSETS = tuple(
@@ -140,12 +152,14 @@ def grasp_height(object_height: float) -> float:
 
 
 RIGHT_ARM_OUT = {"r_sho_roll": 0.0, "r_sho_pitch": 0.0, "r_el": 0.0, "r_wrist": 0.0}
-# The left arm swung back, straight: its hand clear of the floor in the crouch, within the body's width (nothing
-# beside the robot is touched) and its weight behind the trunk, against the reaching right arm. Teleported scratch
-# grasps on a 5 x 5 grid of the reach window (0.27-0.35 m ahead, -0.19 to -0.03 m to the side) lifted the mug at
-# every point, also beside the wall on world seeds 4, 5 and 10; with the left arm out sideways, the hand pushed the
-# wall and the robot over; with it forward, the grasps 0.33 m ahead failed (the robot tipped, the mug slipped).
-LEFT_ARM_BACK = {"l_sho_pitch": 0.8, "l_sho_roll": 1.3, "l_el": 0.0}
+# The left arm swung further back from its rest, the elbow still bent: its hand clear of the floor in the crouch
+# (8.6 cm at the deepest), within the body's width (nothing beside the robot is touched; 0.13 m out at most, the arm at
+# rest 0.15 m), its forearm 2.5 cm from the trunk (the reaching solver holds it still) and its weight behind the trunk,
+# against the reaching right arm. Teleported scratch grasps on a 5 x 5 grid of the reach window (0.27-0.35 m ahead,
+# -0.19 to -0.03 m to the side), with the arm straight, lifted the mug at every point, also beside the wall on world
+# seeds 4, 5 and 10; with the left arm out sideways, the hand pushed the wall and the robot over; with it forward, the
+# grasps 0.33 m ahead failed (the robot tipped, the mug slipped). Straight, it was 0.19 m out, wider than at rest.
+LEFT_ARM_BACK = {"l_sho_pitch": 1.0, "l_sho_roll": 1.3, "l_el": -0.8}
 
 
 def room_on_left(
@@ -160,9 +174,9 @@ def room_on_left(
 
 
 def arm_out_moves() -> list[Move]:
-    """From arms down to the right hand in front at shoulder height, clear of what stands on the surface: raise the
-    arm sideways (opening the gripper out there), turn it flat, fold the elbow, swing it forward (a straight hand
-    path would sweep through the counter). The left arm swings back for the crouch (LEFT_ARM_BACK)."""
+    """From the arms at rest to the right hand in front at shoulder height, clear of what stands on the surface:
+    raise the arm sideways (opening the gripper out there), turn it flat, fold the elbow, swing it forward (a
+    straight hand path would sweep through the counter). The left arm swings back for the crouch (LEFT_ARM_BACK)."""
     return [
         JointMove({**RIGHT_ARM_OUT, **LEFT_ARM_BACK, "r_grip": humanoid_v1.FINGER_TRAVEL}, 0.8, "raise sideways"),
         JointMove({"r_sho_pitch": 1.57}, 0.6, "turn flat"),
@@ -210,10 +224,10 @@ def grasping(commanded_grip_m: float, measured_grip_m: float) -> bool:
 
 def carry_moves() -> list[Move]:
     """From holding the object up where it was grasped to carrying it close to the body (less to sway when
-    walking, nothing sticking out to sweep into furniture when turning); the left arm goes back down."""
+    walking, nothing sticking out to sweep into furniture when turning); the left arm goes back to rest."""
     stand = humanoid_v1.stand_posture()
-    left_arm_down = {n: stand[n] for n in LEFT_ARM_BACK}
-    return [JointMove({**CARRY_ARM, **left_arm_down}, 1.2, "carry")]
+    left_arm_at_rest = {n: stand[n] for n in LEFT_ARM_BACK}
+    return [JointMove({**CARRY_ARM, **left_arm_at_rest}, 1.2, "carry")]
 
 
 PLACE_ABOVE_M = 0.04  # the object is carried over its spot this high above where it will stand, then lowered

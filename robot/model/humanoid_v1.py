@@ -126,10 +126,21 @@ STAND_KNEE_BEND = op3.STAND_KNEE_BEND
 CROUCH_KNEE_BEND = 1.4
 
 
+# The arms at rest are held back beside the trunk (left side; the right mirrors it): hanging down (OP3's own stand),
+# the hands with their grippers are 0.22 m out from the trunk's centre and 5 cm above the soles, where the navigator's
+# berth (0.24 m for the trunk's centre) left them 1-2 cm from what the robot walked past: patrols touched furniture,
+# the dropped box and the floor. Held back, they are 0.15 m out at most, 10 cm higher and clear of the legs.
+ARMS_AT_REST = {"sho_pitch": 0.6, "sho_roll": 1.1, "el": -0.8}
+
+
 def stand_posture(knee_bend: float = STAND_KNEE_BEND) -> dict[str, float]:
-    """Joint targets of a standing posture: knees bent, hips and ankles share the bend, arms down, grippers closed
-    (an open gripper's lower finger hangs 2 cm above the floor, and a walking robot's sway dragged it along)."""
+    """Joint targets of a standing posture: knees bent, hips and ankles share the bend, the arms held back beside
+    the trunk (`ARMS_AT_REST`), grippers closed (an open gripper's lower finger hangs 2 cm above the floor, and a
+    walking robot's sway dragged it along)."""
     posture = op3.stand_posture(knee_bend)
+    for joint, angle in ARMS_AT_REST.items():
+        posture[f"l_{joint}"] = angle
+        posture[f"r_{joint}"] = -angle
     posture.update({"l_wrist": 0.0, "r_wrist": 0.0, "l_grip": 0.0, "r_grip": 0.0})
     return posture
 

@@ -18,6 +18,7 @@ from robot.manipulation.grasp_plan import (
     grasp_stance,
     no_room_to_stand,
     stance_taken,
+    trunk_pose_at,
 )
 from robot.manipulation.pick import PickFailed
 from robot.manipulation.stand_up import arm_back_moves, standing_up_with
@@ -90,19 +91,26 @@ class ArmBody:
             raise PickFailed(no_room_to_stand("object", stance))
         good_stop = None if reach is None else (lambda: self.comfortably_reaches(reach))
         self._parts.head.point(0.0, DEFAULT_TILT)
-        back = (stance.x - STAGING_BACK_M * math.cos(stance.yaw), stance.y - STAGING_BACK_M * math.sin(stance.yaw))
+        goal = self.trunk_goal(stance)
+        x, y, yaw = goal
+        back = (x - STAGING_BACK_M * math.cos(yaw), y - STAGING_BACK_M * math.sin(yaw))
         navigator = self._navigator(self._ctx)
         position, _ = self._parts.localiser.map_trunk()
         here = (float(position[0]), float(position[1]))
         try:
-            if math.dist(here, (stance.x, stance.y)) < STEP_TO_M:  # the reach window is +-4 cm: settle tightly
-                navigator.step_to((stance.x, stance.y, stance.yaw), STANCE_SETTLE_M, good_stop)
+            if math.dist(here, (x, y)) < STEP_TO_M:  # the reach window is +-4 cm: settle tightly
+                navigator.step_to(goal, STANCE_SETTLE_M, good_stop)
             else:
-                navigator.go(back, (stance.x, stance.y, stance.yaw), good_stop)
+                navigator.go(back, goal, good_stop)
         except NavigationFailed as exc:
             raise PickFailed(str(exc)) from exc
         finally:
             self._walk_ended()
+
+    def trunk_goal(self, stance: Stance) -> tuple[float, float, float]:
+        """The trunk's pose to walk to for the feet to stand at `stance`, with the arms as they are now."""
+        arm = self._parts.arm
+        return trunk_pose_at(stance, arm.motion().trunk_ahead_of_com(arm.joint_positions()))
 
     def stance_for(self, point_in_map: np.ndarray) -> Stance:
         x, y = float(point_in_map[0]), float(point_in_map[1])

@@ -166,7 +166,7 @@ class ManipulateSkill:
                 spot = self.place_spot(place, held)
                 if spot is not None and self._world().resolve_place(step.args["location"]) == place.name:
                     stance = grasp_stance((float(spot[0]), float(spot[1])), place.approach[2])
-                    return (stance.x, stance.y, stance.yaw), functools.partial(self._has_spot_here, place, held, arm)
+                    return arm.trunk_goal(stance), functools.partial(self._has_spot_here, place, held, arm)
                 continue
             if step.action != "pick_object" or place.surface is None:
                 continue
@@ -177,7 +177,7 @@ class ManipulateSkill:
                 stance = grasp_stance(remembered.position[:2], place.approach[2], blocked)
                 if blocked is not None and stance_taken(stance, blocked):
                     raise StepFailed(no_room_to_stand(name, stance))
-                return (stance.x, stance.y, stance.yaw), functools.partial(self._remembered_in_reach, name, arm)
+                return arm.trunk_goal(stance), functools.partial(self._remembered_in_reach, name, arm)
         return place.approach, None
 
     def _has_spot_here(self, place: Place, held: str, arm: ArmBody) -> bool:

@@ -32,10 +32,10 @@ from robot.skills.body import BodyParts, Legs, Localiser, PerceptionView
 CARRY_CLEARANCE_M = 0.02  # between the carried object and a surface's edge, before turning away from it
 MIN_STEP_BACK_M = 0.04
 # A place on a mat (the dock's pad) is walked onto straight along its heading, from this far beyond the mat's edge
-# (the feet 10 cm off it): a path ending on the mat came at it aslant, a foot landed on its corner and the trunk
-# tilted 7-8 degrees (with the arms held back, tried at stop 64, the robot then fell backwards: tours to the dock on
-# world 2, 2 of 6). The stop there can end 10 cm past it, still turning (world 2, 1 of 4 runs at 0.25 m): that far
-# leaves the feet clear of the edge all the same.
+# (the feet 10 cm off it): a path ending on the mat came at it aslant, a foot landed on its corner, the trunk tilted
+# 6-10 degrees and, with the arms held back, the robot fell backwards (tours to the dock on world 2: 2 of 6). The stop
+# there can end 10 cm past it, still turning (world 2, 1 of 4 runs at 0.25 m): that far leaves the feet clear of the
+# edge all the same.
 MAT_ENTRY_M = 0.35
 # Paths keep the robot's centre this far from a mat's edge (on it or off it): the feet reach `FEET_REACH_M`, and a
 # path along the pad's edge to its entry turned in place 10 cm off the edge (a typed pose on the dock, world 2).

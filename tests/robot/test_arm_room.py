@@ -40,6 +40,52 @@ def test_an_obstacle_beside_the_right_arm_blocks_a_wave_and_a_turn_clears_it() -
     assert turn_for_room(grid_with((-0.1, 0.1, 0.35, 0.5)), (0.0, 0.0, 0.0), WAVE_SWEEP) == 0.0
 
 
+def test_a_chair_behind_the_right_shoulder_blocks_a_wave_rising_from_the_arm_at_rest() -> None:
+    """The arm at rest is held back: the wave rises from behind the trunk (demo, world 4: it hit a chair there)."""
+    chair = grid_with((-0.32, -0.22, -0.35, -0.15))
+    assert occupied_cells(chair, (0.0, 0.0, 0.0), WAVE_SWEEP) > 0
+    assert occupied_cells(chair, (0.0, 0.0, 0.0), point_sweep(0.0)) > 0
+    turn = turn_for_room(chair, (0.0, 0.0, 0.0), WAVE_SWEEP)
+    assert turn is not None and occupied_cells(chair, (0.0, 0.0, turn), WAVE_SWEEP) == 0
+
+
+def _right_arm_centres(moves) -> np.ndarray:
+    """The centres of the right arm's parts in the trunk's frame (x ahead, y left), every 5 % of each joint move
+    from the standing posture, played through the model's kinematics."""
+    import mujoco
+
+    from robot.model import humanoid_v1
+
+    model = humanoid_v1.build_robot_spec().compile()
+    data = mujoco.MjData(model)
+    trunk = model.body(humanoid_v1.TRUNK_BODY).id
+    arm = ("r_sho", "r_el", "r_wrist", "r_grip", "r_finger", "r_palm")
+    geoms = [g for g in range(model.ngeom) if model.body(model.geom_bodyid[g]).name.startswith(arm)]
+    geoms = [g for g in geoms if model.geom_contype[g]]
+    assert geoms
+    posture = humanoid_v1.stand_posture()
+    centres = []
+    for move in moves:
+        start, target = dict(posture), {**posture, **move.positions}
+        for t in np.linspace(0.0, 1.0, 21):
+            for name, angle in start.items():
+                data.qpos[model.jnt_qposadr[model.joint(name).id]] = angle + (target[name] - angle) * t
+            mujoco.mj_kinematics(model, data)
+            rotation, origin = data.xmat[trunk].reshape(3, 3), data.xpos[trunk]
+            centres += [rotation.T @ (data.geom_xpos[g] - origin) for g in geoms]
+        posture = target
+    return np.array(centres)
+
+
+def test_each_sweep_holds_what_its_gesture_moves_through_from_the_arm_at_rest() -> None:
+    from robot.behaviours.gestures import point_moves, wave_moves
+
+    for sweep, moves in [(WAVE_SWEEP, wave_moves()), *((point_sweep(d), point_moves(d)) for d in (0.0, 0.5, 1.0))]:
+        centres = _right_arm_centres(moves)
+        assert centres[:, 0].min() > sweep.x[0] + 0.05 and centres[:, 0].max() < sweep.x[1]  # a part's radius
+        assert centres[:, 1].min() > sweep.y[0] + 0.05 and centres[:, 1].max() < sweep.y[1]
+
+
 def test_a_robot_boxed_in_has_no_room_and_far_things_do_not_count() -> None:
     ring = grid_with((-0.6, 0.6, -0.6, -0.3), (-0.6, 0.6, 0.3, 0.6), (-0.6, -0.3, -0.6, 0.6), (0.3, 0.6, -0.6, 0.6))
     assert turn_for_room(ring, (0.0, 0.0, 0.0), WAVE_SWEEP) is None

@@ -11,8 +11,10 @@ import pytest
 from robot.control.gait import write_placo_model
 from robot.manipulation.arm_motion import ArmMotion
 from robot.manipulation.grasp_plan import (
+    CARRY_ARM,
     CROWDED_LEFT_OFFSET,
     GRASP_OFFSET,
+    LEFT_ARM_BACK,
     REACH_SURFACE_Z,
     REACH_X,
     REACH_Y,
@@ -21,6 +23,7 @@ from robot.manipulation.grasp_plan import (
     grasp_moves,
     grasp_stance,
     lift_moves,
+    place_moves,
     reach_problem,
     room_on_left,
 )
@@ -89,3 +92,25 @@ def test_the_left_hand_stays_within_the_bodys_width_and_off_the_floor_through_th
     assert left_hand[:, 1].max() < left_hand[0, 1] + 0.005  # never further out than it hangs when standing
     assert left_hand[:, 2].min() > 0.04  # clear of the floor (out sideways: 0.32 m out; hanging or forward: < 0)
     assert np.abs(motion.commanded_hand() - point - [0, 0, 0.05]).max() < 1e-6  # the right hand did lift
+
+
+@pytest.mark.parametrize("surface_z", [REACH_SURFACE_Z[0], 0.2])
+def test_the_left_arm_holds_still_while_the_right_hand_sets_an_object_down(reach_ik: ReachIK, surface_z: float) -> None:
+    """The reaching solver balances with the legs, not the other arm: left free, it rolled the left arm in against
+    the trunk while a mug was set down on the table, until the shoulder servo overloaded and the robot stopped."""
+    moves, _ = place_moves(np.array([0.31, -0.11, surface_z]), 0.08)
+    motion = ArmMotion(reach_ik, 0.01)
+    joints = np.array([{**humanoid_v1.stand_posture(), **CARRY_ARM}[n] for n in humanoid_v1.JOINT_NAMES])
+    motion.start(joints, "right")
+    motion.queue(*moves)
+    left = [humanoid_v1.JOINT_NAMES.index(n) for n in LEFT_ARM_BACK]
+    held = np.array(list(LEFT_ARM_BACK.values()))
+    swung_back = False
+    for _ in range(5000):
+        joints = motion.update(joints)
+        swung_back = swung_back or np.allclose(joints[left], held)
+        if swung_back:
+            assert np.allclose(joints[left], held, atol=1e-6)
+        if motion.done.is_set():
+            break
+    assert motion.done.is_set() and swung_back

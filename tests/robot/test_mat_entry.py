@@ -1,6 +1,6 @@
 """A place on a mat (the dock's 3 mm pad) is walked onto straight along its approach heading, from beyond the mat's
-edge: a path that ended on the mat came at it aslant and a foot landed on the pad's corner (the robot, its arms held
-back as tried at stop 64, then fell backwards)."""
+edge: a path that ended on the mat came at it aslant, a foot landed on the pad's corner and the robot, its arms held
+back, fell backwards."""
 
 from __future__ import annotations
 

@@ -10,8 +10,18 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
+from robot.control.gait import write_placo_model
 from robot.interface import CancelPlan, ExecutePlan, PlanState
-from robot.manipulation.grasp_plan import GRASP_OFFSET, comfortably_in_reach, grasp_stance, reach_problem
+from robot.manipulation.grasp_plan import (
+    CARRY_ARM,
+    GRASP_OFFSET,
+    comfortably_in_reach,
+    grasp_stance,
+    reach_problem,
+    trunk_pose_at,
+)
+from robot.manipulation.reach_ik import ReachIK
+from robot.model import humanoid_v1
 from robot.model.scene import object_body_name
 from robot.model.world import generate_world
 from robot.sim.backend import MujocoSimBackend
@@ -26,6 +36,28 @@ def test_the_grasp_stance_puts_the_object_ahead_and_to_the_right_of_the_feet(yaw
     ahead, left = c * dx + s * dy, -s * dx + c * dy
     assert (ahead, left) == pytest.approx(GRASP_OFFSET, abs=1e-9)
     assert stance.yaw == yaw
+
+
+@pytest.mark.parametrize("yaw", [0.0, math.pi / 2, -2.5])
+def test_the_walk_to_a_stance_steers_the_trunk_to_where_it_stands_over_feet_at_the_stance(yaw: float) -> None:
+    stance = grasp_stance((1.6, 0.7), yaw)
+    x, y, heading = trunk_pose_at(stance, np.array([0.035, 0.01]))
+    dx, dy = x - stance.x, y - stance.y
+    c, s = math.cos(yaw), math.sin(yaw)
+    assert (c * dx + s * dy, -s * dx + c * dy) == pytest.approx((0.035, 0.01), abs=1e-9)
+    assert heading == yaw
+
+
+def test_the_trunk_stands_ahead_of_the_feet_by_what_balances_the_arms() -> None:
+    """The walk ends with the centre of mass over the feet: arms at rest (held back) put the trunk ahead of it, an
+    arm carrying in front less so; the mirror image has the trunk on the centre line."""
+    ik = ReachIK(write_placo_model(), 0.01)
+    standing = humanoid_v1.stand_posture()
+    at_rest = np.array([standing[name] for name in humanoid_v1.JOINT_NAMES])
+    carrying = np.array([{**standing, **CARRY_ARM}[name] for name in humanoid_v1.JOINT_NAMES])
+    rest_ahead, carry_ahead = ik.trunk_ahead_of_com(at_rest), ik.trunk_ahead_of_com(carrying)
+    assert 0.01 < rest_ahead[0] < 0.05 and abs(rest_ahead[1]) < 0.002
+    assert carry_ahead[0] < rest_ahead[0] - 0.005
 
 
 def test_a_stop_is_good_for_a_grasp_only_with_the_object_well_inside_the_reach() -> None:
