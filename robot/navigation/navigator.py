@@ -101,6 +101,11 @@ TURN_STALL_RAD = math.radians(10.0)
 # second (world seed 22, carrying the mug: 20 s of that, the heading never nearer, then "stuck" 0.47 m from the table).
 TURN_STALL_MIN_RAD_S = 0.2
 STEP_CLEAR_M = 0.1
+# Turning in place, the hands at rest sweep 0.25 m round the trunk's centre (the fingers 0.2 m behind it and 0.15 m
+# out), and the walk sways: a path that starts with a turn in place nearer than this to something on the map (its
+# cells' centres, up to 2.5 cm inside what they map) first steps clear of it. The patrol on world seed 4 put a finger
+# on a chair 0.27 m behind the robot turning at the start (mapped 0.30 m away).
+TURN_ROOM_M = 0.35
 STEP_CLEAR_M_S = 0.04
 STEP_CLEAR_SEARCH_M = 0.4
 # Backing away from a surface before turning (a carried object held out over it would sweep along it).
@@ -445,6 +450,10 @@ class Navigator:
         x, y, _ = body.pose()
         end_speed = STOP_END_SPEED if stop_at_end else RUN_ON_END_SPEED
         path = self._plan_or_wait((x, y), goal, facing)
+        if not self._room_to_turn(path):
+            self._step_clear()
+            x, y, _ = body.pose()
+            path = self._plan_or_wait((x, y), goal, facing)
         report.path = tuple(path)
         self._on_update(NavigationState(self._goal, report.path, report.replans))
         follower = PathFollower(path, end_speed)
@@ -531,6 +540,15 @@ class Navigator:
             return None
         new = retarget()
         return new if math.dist(new, goal) > RETARGET_M else None
+
+    def _room_to_turn(self, path: list[tuple[float, float]]) -> bool:
+        """Whether the path starts without a turn in place (as the follower would start it), or with room for one."""
+        x, y, yaw = self.body.pose()
+        first = PathFollower(path, STOP_END_SPEED).update(x, y, yaw)
+        if first.arrived or first.vx > 0.0:
+            return True
+        costmap = self.body.costmap(0.0)
+        return costmap is None or _away_from_nearest(costmap, x, y, TURN_ROOM_M) is None
 
     def _step_clear(self) -> None:
         """Walk a little away from the nearest obstacle on the map (its grown margin is where the robot stands)."""

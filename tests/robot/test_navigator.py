@@ -19,6 +19,7 @@ from robot.navigation.navigator import (
     SETTLE_GROWTH_M,
     SETTLED_M,
     STUCK_S,
+    TURN_ROOM_M,
     NavigationFailed,
     Navigator,
     StopDrift,
@@ -168,11 +169,29 @@ def test_a_robot_backs_away_first_and_walks_on_into_its_path_without_stopping() 
 
 
 def test_a_turn_in_place_that_does_not_turn_steps_clear_of_the_nearest_obstacle_and_goes_on() -> None:
-    body = MappedBody(_map_with((0.0, 0.2)), stuck_m=0.03)  # the end of a wall just to its left
+    body = MappedBody(_map_with((0.0, 0.37)), stuck_m=0.03)  # a wall end to its left, beyond TURN_ROOM_M
     report = Navigator(body, lambda: body.t).go((-1.0, -0.5))  # behind it: it must turn round first
     assert min(y for _, y, _ in body.track) < -0.04  # it stepped away from the wall, to its right
     assert report.final_error_m < 0.1
     assert body.t < STUCK_S  # well before it would have given up as stuck
+
+
+@pytest.mark.parametrize("chair", [(-0.27, 0.0), (-0.2, -0.17)])
+def test_a_robot_that_must_turn_in_place_beside_something_steps_clear_of_it_before_turning(chair) -> None:
+    """Turning in place, the hands at rest sweep 0.25 m round the trunk: a finger touched a chair 0.27 m behind."""
+    body = MappedBody(_map_with(chair))
+    report = Navigator(body, lambda: body.t).go((0.0, 1.0))  # to its left: a quarter turn in place first
+    turning = [(x, y) for (x, y, _), (vx, vy, w) in zip(body.track, body.commands, strict=True) if vx == vy == 0 != w]
+    assert turning and min(math.dist(p, chair) for p in turning) >= TURN_ROOM_M
+    assert report.final_error_m < 0.1
+
+
+def test_with_room_to_turn_a_robot_turns_where_it_stands() -> None:
+    body = MappedBody(_map_with((-0.45, 0.0)))
+    Navigator(body, lambda: body.t).go((0.0, 1.0))
+    first_move = next(i for i, command in enumerate(body.commands) if command != (0.0, 0.0, 0.0))
+    vx, vy, w = body.commands[first_move]
+    assert vx == vy == 0.0 and w > 0.0 and math.hypot(*body.track[first_move][:2]) < 1e-9
 
 
 def test_the_path_end_follows_the_approach_pose_when_what_the_robot_sees_moves_it() -> None:
@@ -204,7 +223,7 @@ class PushedBackBody(MappedBody):
 
 
 def test_a_turn_that_only_wobbles_against_something_is_noticed_as_not_turning() -> None:
-    body = PushedBackBody(_map_with((0.0, 0.2)), stuck_m=0.03)
+    body = PushedBackBody(_map_with((0.0, 0.37)), stuck_m=0.03)
     report = Navigator(body, lambda: body.t).go((-1.0, -0.5))  # behind it: it must turn round first
     assert report.final_error_m < 0.1
     assert body.t < STUCK_S  # it stepped clear instead of wobbling until it gave up as stuck
@@ -226,7 +245,7 @@ class PinnedBody(MappedBody):
 
 
 def test_a_pinned_robot_told_by_turns_to_turn_in_place_and_to_walk_on_turning_is_noticed_as_not_turning() -> None:
-    body = PinnedBody(_map_with((0.0, 0.2)), stuck_m=0.03)
+    body = PinnedBody(_map_with((0.0, 0.37)), stuck_m=0.03)
     body.yaw = TURN_IN_PLACE_RAD
     report = Navigator(body, lambda: body.t).go((1.0, 0.0))
     pinned = [vx for (x, y, _), (vx, _, _) in zip(body.track, body.commands, strict=True) if math.hypot(x, y) < 0.03]
