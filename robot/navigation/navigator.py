@@ -122,8 +122,9 @@ class NavBody(Protocol):
     def pose(self) -> tuple[float, float, float]:
         """Where the robot believes it is, in the map frame: x, y, heading."""
 
-    def costmap(self, inflate_m: float) -> Costmap | None:
-        """The latest map with its obstacles grown by `inflate_m` (None before the first map)."""
+    def costmap(self, inflate_m: float, off_mat_edges: bool = True) -> Costmap | None:
+        """The latest map with its obstacles grown by `inflate_m` (None before the first map); `off_mat_edges`:
+        blocked too where a foot would be on the edge of a mat on the floor (paths keep off them)."""
 
     def drive(self, vx: float, vy: float, yaw_rate: float) -> None:
         """Velocity for the legs, in the robot's frame (a deadman: repeat it every control period)."""
@@ -315,14 +316,17 @@ class Navigator:
         stop_drift: StopDrift | None = None,
         clearance_m: float = CLEARANCE_M,
         open_speed_m_s: float = OPEN_M_S,
+        turn_room_m: float = TURN_ROOM_M,
     ) -> None:
         """`stop_drift` is shared by the navigations of one robot (what one stop taught serves the next).
         `clearance_m`: the berth its paths keep from obstacles where there is room, beyond the footprint (a robot
         carrying something needs CARRYING_CLEARANCE_M); CLEARANCE_M at least. `open_speed_m_s`: the speed in the open
-        (see OPEN_M_S; a carrying robot's is the follower's usual speed)."""
+        (see OPEN_M_S; a carrying robot's is the follower's usual speed). `turn_room_m`: see TURN_ROOM_M (0: never
+        step clear before turning; a robot carrying something, its arm held out in front, does not)."""
         self.body = body
         self.clearance_m = clearance_m
         self.open_speed_m_s = open_speed_m_s
+        self.turn_room_m = turn_room_m
         self.stop_drift = stop_drift if stop_drift is not None else StopDrift()
         self._now = sim_time
         self._on_update = on_update or (lambda state: None)
@@ -542,18 +546,24 @@ class Navigator:
         return new if math.dist(new, goal) > RETARGET_M else None
 
     def _room_to_turn(self, path: list[tuple[float, float]]) -> bool:
-        """Whether the path starts without a turn in place (as the follower would start it), or with room for one."""
+        """Whether the path starts without a turn in place (as the follower would start it), or with room for one,
+        or where a step clear would do harm: on or beside a mat (a sidestep there lands a foot on its edge)."""
+        if self.turn_room_m <= 0.0:
+            return True
         x, y, yaw = self.body.pose()
         first = PathFollower(path, STOP_END_SPEED).update(x, y, yaw)
         if first.arrived or first.vx > 0.0:
             return True
-        costmap = self.body.costmap(0.0)
-        return costmap is None or _away_from_nearest(costmap, x, y, TURN_ROOM_M) is None
+        standing = self.body.costmap(0.0)
+        if standing is not None and standing.blocked_at(x, y):
+            return True  # by a mat's edge (or inside an obstacle's cell, as the map has it): turn where it stands
+        obstacles = self.body.costmap(0.0, off_mat_edges=False)
+        return obstacles is None or _away_from_nearest(obstacles, x, y, self.turn_room_m) is None
 
     def _step_clear(self) -> None:
         """Walk a little away from the nearest obstacle on the map (its grown margin is where the robot stands)."""
         body = self.body
-        costmap = body.costmap(0.0)
+        costmap = body.costmap(0.0, off_mat_edges=False)
         x, y, yaw = body.pose()
         away = _away_from_nearest(costmap, x, y, STEP_CLEAR_SEARCH_M) if costmap is not None else None
         if away is None:

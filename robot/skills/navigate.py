@@ -19,6 +19,7 @@ from robot.navigation.navigator import (
     CARRYING_CLEARANCE_M,
     CLEARANCE_M,
     OPEN_M_S,
+    TURN_ROOM_M,
     NavigationFailed,
     NavigationReport,
     Navigator,
@@ -185,8 +186,11 @@ class NavigateSkill:
         carrying = self._parts.arm.held is not None
         clearance = CARRYING_CLEARANCE_M if carrying else CLEARANCE_M
         speed = MAX_FORWARD_M_S if carrying else OPEN_M_S
+        turn_room = 0.0 if carrying else TURN_ROOM_M
         clock = self._parts.clock
-        return Navigator(self.legs_and_map(ctx), clock.now, self.set_navigation, self._stop_drift, clearance, speed)
+        return Navigator(
+            self.legs_and_map(ctx), clock.now, self.set_navigation, self._stop_drift, clearance, speed, turn_room
+        )
 
     def _onto_mat(
         self,

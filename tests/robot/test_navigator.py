@@ -41,7 +41,7 @@ class DriftingBody:
     def pose(self) -> tuple[float, float, float]:
         return (self.x, self.y, self.yaw)
 
-    def costmap(self, inflate_m: float) -> None:
+    def costmap(self, inflate_m: float, off_mat_edges: bool = True) -> None:
         return None
 
     def drive(self, vx: float, vy: float, yaw_rate: float) -> None:
@@ -128,17 +128,19 @@ class MappedBody(DriftingBody):
     """A `DriftingBody` on an open map, that cannot turn in place while it stands within `stuck_m` of where it
     started (an arm pressed against the end of a wall, which no map shows)."""
 
-    def __init__(self, costmap: Costmap, stuck_m: float = 0.0) -> None:
+    def __init__(self, costmap: Costmap, stuck_m: float = 0.0, mat_edges: np.ndarray | None = None) -> None:
         super().__init__(drift_m=0.0)
         self.map = costmap
         self.stuck_m = stuck_m
+        self.mat_edges = mat_edges  # cells where a foot would be on a mat's edge
         self.track: list[tuple[float, float, float]] = []
         self.commands: list[tuple[float, float, float]] = []  # as driven, one per wait
 
-    def costmap(self, inflate_m: float) -> Costmap:  # type: ignore[override]
-        return Costmap(
+    def costmap(self, inflate_m: float, off_mat_edges: bool = True) -> Costmap:  # type: ignore[override]
+        grown = Costmap(
             inflate(self.map.blocked, inflate_m / self.map.resolution), self.map.x0, self.map.y0, self.map.resolution
         )
+        return grown.also_blocked(self.mat_edges) if off_mat_edges and self.mat_edges is not None else grown
 
     def wait(self, seconds: float) -> None:
         vx, vy, w = self.velocity
@@ -186,12 +188,29 @@ def test_a_robot_that_must_turn_in_place_beside_something_steps_clear_of_it_befo
     assert report.final_error_m < 0.1
 
 
+def _turns_where_it_stands(body: MappedBody) -> bool:
+    first_move = next(i for i, command in enumerate(body.commands) if command != (0.0, 0.0, 0.0))
+    vx, vy, w = body.commands[first_move]
+    return vx == vy == 0.0 and w > 0.0 and math.hypot(*body.track[first_move][:2]) < 1e-9
+
+
 def test_with_room_to_turn_a_robot_turns_where_it_stands() -> None:
     body = MappedBody(_map_with((-0.45, 0.0)))
     Navigator(body, lambda: body.t).go((0.0, 1.0))
-    first_move = next(i for i, command in enumerate(body.commands) if command != (0.0, 0.0, 0.0))
-    vx, vy, w = body.commands[first_move]
-    assert vx == vy == 0.0 and w > 0.0 and math.hypot(*body.track[first_move][:2]) < 1e-9
+    assert _turns_where_it_stands(body)
+
+
+def test_on_a_mat_or_carrying_a_robot_turns_where_it_stands_even_beside_something() -> None:
+    """A sidestep on the dock's pad put a foot on its edge (tours fell); carrying, it swung the arm held out."""
+    chair = _map_with((-0.27, 0.0))
+    on_the_pad = np.zeros_like(chair.blocked)
+    on_the_pad[chair.cell(0.0, 0.0)] = True
+    body = MappedBody(chair, mat_edges=on_the_pad)
+    Navigator(body, lambda: body.t).go((0.0, 1.0))
+    assert _turns_where_it_stands(body)
+    carrying = MappedBody(chair)
+    Navigator(carrying, lambda: carrying.t, turn_room_m=0.0).go((0.0, 1.0))
+    assert _turns_where_it_stands(carrying)
 
 
 def test_the_path_end_follows_the_approach_pose_when_what_the_robot_sees_moves_it() -> None:
