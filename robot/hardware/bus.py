@@ -31,6 +31,9 @@ log = logging.getLogger(__name__)
 
 LOST_AFTER_FAILED_READS = 3
 PING_ATTEMPTS = 3
+# A servo that answered its ping is there: a read of it is asked this often before it fails, waiting twice as long
+# after each miss (a loaded computer missed three replies in a row once, in the test suite beside two simulations).
+READ_ATTEMPTS = 5
 LATE_REPLY_WAIT_S = 0.05  # after a missed reply: how long to let it arrive late before dropping it
 FAST = (ct.PRESENT_CURRENT.address, 10)  # current (2), velocity (4), position (4): every tick
 POSITION_CONTROL_MODE = 3
@@ -215,17 +218,17 @@ class DynamixelBus:
     def _read_byte(self, joint: JointServo, field: ct.Field) -> int:
         """One byte of a servo's control table, asked again if the reply is lost (a servo that answered its ping
         is there); BusError if it never comes."""
-        for _ in range(PING_ATTEMPTS):
+        for attempt in range(READ_ATTEMPTS):
             value, result, _ = self.packets.read1ByteTxRx(self.port, joint.servo_id, field.address)
             if result == COMM_SUCCESS:
                 return value
-            self._drop_late_reply()
+            self._drop_late_reply(LATE_REPLY_WAIT_S * 2**attempt)
         raise BusError(f"servo {joint.servo_id} ({joint.joint}): {self.packets.getTxRxResult(result)}")
 
-    def _drop_late_reply(self) -> None:
+    def _drop_late_reply(self, wait_s: float = LATE_REPLY_WAIT_S) -> None:
         """A reply that missed its time may still come, and the next request would take it for its own (a
-        firmware version read as a hardware error): let it arrive, then drop it."""
-        time.sleep(LATE_REPLY_WAIT_S)
+        firmware version read as a hardware error): let it arrive (`wait_s`), then drop it."""
+        time.sleep(wait_s)
         self.port.clearPort()
 
     def prepare(self) -> list[str]:
