@@ -144,6 +144,7 @@ def mug_picked() -> Iterator[MugPicked]:
         ]
         found_state = _run(worker, found, 400)
         picked_state = _run(worker, [{"action": "pick_object", "args": {"object": "red mug"}}], 600)
+        _hand_at_rest(backend)
         yield MugPicked(layout, backend, worker, found_state, picked_state, _truth(backend))
     finally:
         worker.stop()
@@ -170,7 +171,7 @@ def test_the_mug_is_found_at_the_counter_then_picked_with_contacts_and_held_up_i
     assert "holding the red mug" in state.plan.steps[0].detail
     assert state.held_object == "red mug" and not state.fallen
     assert math.dist(truth.mug[:2], truth.hand[:2]) < 0.03  # between the fingers
-    assert truth.mug[2] > mug_picked.counter_height + 0.04  # lifted clear of the counter
+    assert truth.mug[2] > mug_picked.counter_height + 0.04, truth  # lifted clear of the counter
     assert math.dist(truth.mug[:2], truth.trunk[:2]) < 0.30  # and held in close to the body, ready to walk
     picked = next(e for e in worker.recent_events() if e.kind == "manipulation/picked")
     assert picked.data["rise_m"] > 0.03
@@ -192,10 +193,27 @@ def _place_cancelled_when(mug_picked: MugPicked, moment) -> object:
     return worker.state()
 
 
+def _hand_at_rest(backend: MujocoSimBackend, still_m: float = 0.001, over_s: float = 0.2) -> None:
+    """Wait until the hand has stopped moving, by the simulator (less than `still_m` in `over_s` simulated seconds):
+    a plan ends when the arm's last commanded move does, and the servos, carrying the mug, catch up a moment later
+    (read then, on a busy machine, the mug was still 2 cm below where it is carried)."""
+    deadline = time.monotonic() + 120
+    since, start = backend.data.time, _truth(backend).hand
+    while time.monotonic() < deadline:
+        now, hand = backend.data.time, _truth(backend).hand
+        if now - since >= over_s:
+            if math.dist(hand, start) < still_m:
+                return
+            since, start = now, hand
+        time.sleep(0.002)
+    raise AssertionError(f"the hand never came to rest (at {start})")
+
+
 def _stood_up(mug_picked: MugPicked):
-    """The next plan stands the robot up from the stopped reach first; the state once it stands."""
+    """The next plan stands the robot up from the stopped reach first; the state once it stands still."""
     _run(mug_picked.worker, [{"action": "wait", "args": {"seconds": "1"}}], 120)
     assert mug_picked.worker.wait_for(lambda s: s.locomotion.posture == "stand" or s.fallen, 60)
+    _hand_at_rest(mug_picked.backend)
     return mug_picked.worker.state()
 
 
@@ -216,7 +234,8 @@ def test_a_place_stopped_midway_stands_up_with_the_mug_if_the_hand_has_it_and_wi
     truth = mug_picked.now()
     assert not state.fallen and state.held_object == "red mug"
     assert math.dist(truth.mug, truth.hand) < 0.04 and truth.grip_m == pytest.approx(carried_grip, abs=0.002)
-    assert truth.mug[2] > counter + 0.04  # lifted clear, not swung down to the hip
+    # lifted clear, not swung down to the hip (there the mug is below the counter): carried it stands 5.5-6 cm above
+    assert truth.mug[2] > counter + 0.02, truth
     assert math.dist(truth.mug[:2], truth.trunk[:2]) < 0.30  # carried in close, as after a pick
     assert truth.elbow > 1.5  # folded as for carrying (swung back and down it is straight)
 
