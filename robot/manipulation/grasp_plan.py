@@ -17,6 +17,7 @@ import numpy as np
 from robot.manipulation.arm_motion import HandMove, JointMove, Move
 from robot.manipulation.reach_ik import trunk_height_for
 from robot.model import humanoid_v1
+from robot.model.world import Box
 
 # The object in the feet frame when standing to grasp it with the right hand (m).
 GRASP_OFFSET = (0.31, -0.11)
@@ -59,6 +60,21 @@ def trunk_pose_at(stance: Stance, trunk_ahead: np.ndarray) -> tuple[float, float
     return stance.x + c * dx - s * dy, stance.y + s * dx + c * dy, stance.yaw
 
 
+# Where the robot's feet, shins and hands at rest are, around a stance (stance frame, m: x ahead, y to the left):
+# the hands held back reach 0.2 m behind the trunk and 0.15 m out to the sides. Nothing on the map may be there (the
+# last steps onto a stance are walked without the map: at world seed 0 the robot pushed a chair for 30 s trying to
+# stand where it stood).
+STANCE_FOOTPRINT_X = (-0.2, 0.08)
+STANCE_FOOTPRINT_Y = (-0.18, 0.18)
+# Where the right arm swings out to the side as it rises (stance frame, m): the hand 0.35 m out from the feet centre.
+ARM_SWEEP_X = (-0.1, 0.06)
+ARM_SWEEP_Y = (-0.38, -0.14)
+# Turns (rad) from a place's approach to try when something stands on the stance: two small, two larger.
+TURNED_FACINGS_RAD = (0.35, -0.35, 0.7, -0.7)
+# How far in from a surface's edge an object can be grasped from that side: the toes stay out of the surface.
+OBJECT_FROM_EDGE_MAX_M = GRASP_OFFSET[0] - STANCE_FOOTPRINT_X[1]
+
+
 def grasp_stance(
     object_xy: tuple[float, float], facing_yaw: float, blocked: Callable[[float, float], bool] | None = None
 ) -> Stance:
@@ -80,12 +96,60 @@ def grasp_stance(
     return stance
 
 
-# Where the robot's feet, shins and hands at rest are, around a stance (stance frame, m: x ahead, y to the left):
-# the hands held back reach 0.2 m behind the trunk and 0.15 m out to the sides. Nothing on the map may be there (the
-# last steps onto a stance are walked without the map: at world seed 0 the robot pushed a chair for 30 s trying to
-# stand where it stood).
-STANCE_FOOTPRINT_X = (-0.2, 0.08)
-STANCE_FOOTPRINT_Y = (-0.18, 0.18)
+def stance_facings(approach_yaw: float, surface: Box | None, object_xy: tuple[float, float]) -> list[float]:
+    """The ways to face a surface to grasp an object on it, in the order to try them: the place's approach, turned
+    a little either way, squarely from another side of the surface the object is near enough to reach across,
+    then turned further. At world seed 0 a chair
+    stood against the counter where the feet go for the apple, and the fetch gave up ("no room to stand")."""
+    facings = [approach_yaw, *(approach_yaw + turn for turn in TURNED_FACINGS_RAD[:2])]
+    if surface is not None:
+        cx, cy, hx, hy = surface.x, surface.y, surface.half_x, surface.half_y
+        x, y = object_xy
+        sides = (  # (the side's distance from the object, the yaw that faces the surface from it)
+            (x - (cx - hx), 0.0),
+            ((cx + hx) - x, math.pi),
+            (y - (cy - hy), math.pi / 2),
+            ((cy + hy) - y, -math.pi / 2),
+        )
+        for depth, yaw in sorted(sides):
+            if depth <= OBJECT_FROM_EDGE_MAX_M and not _same_yaw(yaw, approach_yaw):
+                facings.append(yaw)
+    facings += [approach_yaw + turn for turn in TURNED_FACINGS_RAD[2:]]
+    return facings
+
+
+def _same_yaw(a: float, b: float) -> bool:
+    return abs(math.remainder(a - b, math.tau)) < 0.1
+
+
+def grasp_stance_facing_any(
+    object_xy: tuple[float, float], facings: list[float], blocked: Callable[[float, float], bool] | None
+) -> Stance:
+    """The first stance in `facings` (see `stance_facings`) where nothing on the map stands (`grasp_stance` for
+    each; the others also with room for the arm to swing out); the first one's when all are taken (the caller
+    checks `stance_taken`)."""
+    first = grasp_stance(object_xy, facings[0], blocked)
+    if blocked is None or not stance_taken(first, blocked):
+        return first
+    for yaw in facings[1:]:
+        stance = grasp_stance(object_xy, yaw, blocked)
+        if not stance_taken(stance, blocked) and not arm_sweep_taken(stance, blocked):
+            return stance
+    return first
+
+
+def arm_sweep_taken(stance: Stance, blocked: Callable[[float, float], bool]) -> bool:
+    """Something on the map where the right arm swings out sideways before reaching forward (`arm_out_moves`),
+    checked every 4 cm. A stance turned beside a box at world seed 4 swept the hand into it and the grasp closed
+    on nothing. (The usual stances of seeds 0-9 have this room.)"""
+    c, s = math.cos(stance.yaw), math.sin(stance.yaw)
+    for ahead in np.arange(ARM_SWEEP_X[0], ARM_SWEEP_X[1] + 1e-9, 0.04):
+        for left in np.arange(ARM_SWEEP_Y[0], ARM_SWEEP_Y[1] + 1e-9, 0.04):
+            if blocked(stance.x + c * ahead - s * left, stance.y + s * ahead + c * left):
+                return True
+    return False
+
+
 # Other places of the object in the feet frame, inside the reach window with REACH_MARGIN_M to spare, nearest the
 # usual one first: where to stand instead when something stands on the usual stance.
 SHIFTED_OFFSETS = tuple(

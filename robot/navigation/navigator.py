@@ -334,7 +334,7 @@ class Navigator:
 
     def go(
         self,
-        staging: tuple[float, float],
+        staging: tuple[float, float] | Callable[[tuple[float, float, float] | None], tuple[float, float]],
         approach: tuple[float, float, float] | Callable[[], tuple[float, float, float]] | None = None,
         good_stop: Callable[[], bool] | None = None,
         back_away_m: float = 0.0,
@@ -342,13 +342,16 @@ class Navigator:
         """Walk a planned path to `staging`, then straight onto the `approach` pose if one is given (a callable is
         asked at the staging point: what the robot sees from there may decide where it stands). `good_stop` is the
         caller's own judgement of where the robot came to rest (a work pose: the object in the arm's reach): a stop
-        it accepts ends the approach, however far from the exact pose. `back_away_m`: first walk straight back this
-        far (away from a surface the robot faces, before it turns), on into the path without stopping."""
+        it accepts ends the approach, however far from the exact pose. A callable `staging` is asked with the
+        approach as now known (the straight walk onto a work pose that faces another way starts elsewhere).
+        `back_away_m`: first walk straight back this far (away from a surface the robot faces, before it turns), on
+        into the path without stopping."""
         report = NavigationReport()
         started = self._now()
         ask = approach if callable(approach) else lambda: approach
         guess = ask()  # where the approach will end, as far as is known now
-        self._goal = guess if guess is not None else (*staging, self.body.pose()[2])
+        staging_for = staging if callable(staging) else lambda _pose: staging
+        self._goal = guess if guess is not None else (*staging_for(None), self.body.pose()[2])
         if back_away_m > 0.0:
             self._back_away(back_away_m, report)
 
@@ -358,7 +361,8 @@ class Navigator:
             if pose is not None:
                 self._goal = pose
             costmap = self.body.costmap(ROBOT_RADIUS + CLEARANCE_M)
-            return staging if costmap is None else arrival_point(staging, pose, costmap.blocked_at)
+            point = staging_for(pose)
+            return point if costmap is None else arrival_point(point, pose, costmap.blocked_at)
 
         # walking on into the approach, without stopping at the staging point, saves a stop and a restart
         retarget = end if callable(approach) else None
@@ -370,7 +374,7 @@ class Navigator:
             self._approach(approach, report, good_stop=good_stop)
         self._on_update(NavigationState(self._goal, report.path, report.replans, "arrived"))
         x, y, yaw = self.body.pose()
-        goal = approach if approach is not None else (*staging, yaw)
+        goal = approach if approach is not None else (*staging_for(None), yaw)
         report.final_error_m = math.dist((x, y), goal[:2])
         report.final_heading_error_deg = math.degrees(abs(math.remainder(yaw - goal[2], math.tau)))
         report.sim_s = self._now() - started

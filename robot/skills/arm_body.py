@@ -16,7 +16,9 @@ from robot.manipulation.grasp_plan import (
     carry_moves,
     comfortably_in_reach,
     grasp_stance,
+    grasp_stance_facing_any,
     no_room_to_stand,
+    stance_facings,
     stance_taken,
     trunk_pose_at,
 )
@@ -114,14 +116,13 @@ class ArmBody:
 
     def stance_for(self, point_in_map: np.ndarray) -> Stance:
         x, y = float(point_in_map[0]), float(point_in_map[1])
-        facing = next(
-            (p.approach[2] for p in self._layout.places if p.surface is not None and p.surface.contains(x, y)),
-            None,
-        )
-        if facing is None:
+        place = next((p for p in self._layout.places if p.surface is not None and p.surface.contains(x, y)), None)
+        if place is None:
             position, _ = self._parts.localiser.map_trunk()
-            facing = math.atan2(y - position[1], x - position[0])
-        return grasp_stance((x, y), facing, self._blocked())
+            return grasp_stance((x, y), math.atan2(y - position[1], x - position[0]), self._blocked())
+        return grasp_stance_facing_any(
+            (x, y), stance_facings(place.approach[2], place.surface, (x, y)), self._blocked()
+        )
 
     def arm(self, moves: list[Move]) -> None:
         arm_part = self._parts.arm

@@ -8,7 +8,13 @@ from typing import Any
 
 import numpy as np
 
-from robot.manipulation.grasp_plan import grasp_stance, no_room_to_stand, stance_taken
+from robot.manipulation.grasp_plan import (
+    grasp_stance,
+    grasp_stance_facing_any,
+    no_room_to_stand,
+    stance_facings,
+    stance_taken,
+)
 from robot.manipulation.pick import PickFailed, pick
 from robot.manipulation.place import PlaceFailed, choose_spot, spots_in_reach
 from robot.manipulation.place import place as place_held
@@ -174,7 +180,8 @@ class ManipulateSkill:
             remembered = perception.memory.get(name)
             if remembered is not None and place.surface.contains(*remembered.position[:2]):
                 blocked = self.map_blocked()
-                stance = grasp_stance(remembered.position[:2], place.approach[2], blocked)
+                xy = (float(remembered.position[0]), float(remembered.position[1]))
+                stance = grasp_stance_facing_any(xy, stance_facings(place.approach[2], place.surface, xy), blocked)
                 if blocked is not None and stance_taken(stance, blocked):
                     raise StepFailed(no_room_to_stand(name, stance))
                 return arm.trunk_goal(stance), functools.partial(self._remembered_in_reach, name, arm)

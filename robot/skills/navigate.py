@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from typing import Any
@@ -32,6 +33,10 @@ from robot.skills.body import BodyParts, Legs, Localiser, PerceptionView
 
 CARRY_CLEARANCE_M = 0.02  # between the carried object and a surface's edge, before turning away from it
 MIN_STEP_BACK_M = 0.04
+# A work pose facing a place within this of its approach is walked onto from the place's staging point; one facing
+# it another way from a point this far behind it (the nearest free on the map).
+SAME_FACING_RAD = 0.1
+WORK_STAGING_BACK_M = (0.12, 0.25, 0.4)
 # A place on a mat (the dock's pad) is walked onto straight along its heading, from this far beyond the mat's edge
 # (the feet 10 cm off it): a path ending on the mat came at it aslant, a foot landed on its corner, the trunk tilted
 # 6-10 degrees and, with the arms held back, the robot fell backwards (tours to the dock on world 2: 2 of 6). The stop
@@ -265,7 +270,8 @@ class NavigateSkill:
                 if place.surface is not None and is_mat(place.surface):
                     report = self._onto_mat(navigator, mat_entry(place), work_pose(), in_reach, ctx)
                 else:
-                    report = navigator.go(place.staging, work_pose, in_reach, self.back_away_m(ctx))
+                    staging = functools.partial(self._staging_for, place, ctx=ctx)
+                    report = navigator.go(staging, work_pose, in_reach, self.back_away_m(ctx))
         except NavigationFailed as exc:
             raise StepFailed(str(exc)) from exc
         finally:
@@ -287,6 +293,24 @@ class NavigateSkill:
             f"at {where}: walked {report.walked_m:.2f} m in {report.sim_s:.0f} s{replans}, "
             f"{report.final_error_m * 100:.1f} cm and {report.final_heading_error_deg:.0f} deg from the goal"
         )
+
+    def _staging_for(
+        self, place: Place, work: tuple[float, float, float] | None, ctx: ExecutionContext
+    ) -> tuple[float, float]:
+        """Where the planned path to a place ends, for the straight walk onto `work` (where the robot will stand):
+        the place's staging point, unless the work pose faces the place another way (a stance turned, or round
+        another side of the surface, as a chair stood where the feet usually go): then a free point behind it along
+        its heading. From the place's staging, the walk onto a stance round the counter's end went straight through
+        the chair (world seed 0)."""
+        if work is None or abs(math.remainder(work[2] - place.approach[2], math.tau)) < SAME_FACING_RAD:
+            return place.staging
+        costmap = self.legs_and_map(ctx).costmap(ROBOT_RADIUS + CLEARANCE_M)
+        c, s = math.cos(work[2]), math.sin(work[2])
+        for back in WORK_STAGING_BACK_M:
+            point = (work[0] - back * c, work[1] - back * s)
+            if costmap is None or not costmap.blocked_at(*point):
+                return point
+        return place.staging
 
     def back_away_m(self, ctx: ExecutionContext) -> float:
         """How far to walk back before setting off: carrying something held out over a surface, the robot would
