@@ -122,6 +122,11 @@ class BehaviourRobot:
     def holding(self) -> str | None:
         return self._parts.arm.held
 
+    def still_holding(self) -> bool:
+        """Whether the fingers still hold what the robot picked up (by the fingers, not the bookkeeping: an object
+        can slip out on the way)."""
+        return self._parts.arm.held is not None and self._parts.arm.grasping()
+
     @property
     def sim_time_s(self) -> float:
         return self._parts.clock.now()

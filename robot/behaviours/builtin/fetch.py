@@ -50,6 +50,10 @@ class Fetch(Behaviour):
                 robot.go_to(destination, to_place=destination)
             robot.progress(0.9)
             return "delivering"
+        if not robot.still_holding():  # it slipped out on the way: say so, not "here it is" (world 204, 2 of 3)
+            raise BehaviourFailed(
+                f"the {obj} is no longer in my hand: it slipped out on the way to {_named(destination)}"
+            )
         if destination != START and robot.place(destination).surface_height >= MIN_SURFACE_M:
             robot.put_down(destination)
             done = f"I put the {obj} on the {destination}."
