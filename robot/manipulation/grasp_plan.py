@@ -141,13 +141,9 @@ def grasp_stance_facing_any(
 def arm_sweep_taken(stance: Stance, blocked: Callable[[float, float], bool]) -> bool:
     """Something on the map where the right arm swings out sideways before reaching forward (`arm_out_moves`),
     checked every 4 cm. A stance turned beside a box at world seed 4 swept the hand into it and the grasp closed
-    on nothing. (The usual stances of seeds 0-9 have this room.)"""
-    c, s = math.cos(stance.yaw), math.sin(stance.yaw)
-    for ahead in np.arange(ARM_SWEEP_X[0], ARM_SWEEP_X[1] + 1e-9, 0.04):
-        for left in np.arange(ARM_SWEEP_Y[0], ARM_SWEEP_Y[1] + 1e-9, 0.04):
-            if blocked(stance.x + c * ahead - s * left, stance.y + s * ahead + c * left):
-                return True
-    return False
+    on nothing. (Asked of the other stances only: a few usual ones that pick fine, world 0's bottle among them,
+    have something there on the map.)"""
+    return _area_taken(stance, ARM_SWEEP_X, ARM_SWEEP_Y, blocked)
 
 
 # Other places of the object in the feet frame, inside the reach window with REACH_MARGIN_M to spare, nearest the
@@ -169,9 +165,19 @@ def no_room_to_stand(what: str, stance: Stance) -> str:
 
 def stance_taken(stance: Stance, blocked: Callable[[float, float], bool]) -> bool:
     """Something on the map where the robot would stand at `stance` (checked every 4 cm over its footprint)."""
+    return _area_taken(stance, STANCE_FOOTPRINT_X, STANCE_FOOTPRINT_Y, blocked)
+
+
+def _area_taken(
+    stance: Stance,
+    ahead_m: tuple[float, float],
+    left_m: tuple[float, float],
+    blocked: Callable[[float, float], bool],
+) -> bool:
+    """Something on the map in the rectangle `ahead_m` x `left_m` of the stance frame (every 4 cm)."""
     c, s = math.cos(stance.yaw), math.sin(stance.yaw)
-    for ahead in np.arange(STANCE_FOOTPRINT_X[0], STANCE_FOOTPRINT_X[1] + 1e-9, 0.04):
-        for left in np.arange(STANCE_FOOTPRINT_Y[0], STANCE_FOOTPRINT_Y[1] + 1e-9, 0.04):
+    for ahead in np.arange(ahead_m[0], ahead_m[1] + 1e-9, 0.04):
+        for left in np.arange(left_m[0], left_m[1] + 1e-9, 0.04):
             if blocked(stance.x + c * ahead - s * left, stance.y + s * ahead + c * left):
                 return True
     return False

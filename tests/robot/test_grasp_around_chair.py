@@ -30,12 +30,16 @@ def layout_map(layout):
     return lambda x, y: any(b.contains(x, y) for b in boxes)
 
 
-def test_a_chair_where_the_feet_go_moves_the_stance_to_a_free_one_with_the_object_still_in_reach() -> None:
-    layout = generate_world(0)
+def at_the_counter(seed: int, name: str):
+    """World `seed`'s kitchen counter, where the object `name` stands on it, and the world's map."""
+    layout = generate_world(seed)
     counter = next(p for p in layout.places if p.name == "kitchen counter")
-    apple = next(o for o in layout.objects if o.name == "green apple")
-    xy = (float(apple.position[0]), float(apple.position[1]))
-    blocked = layout_map(layout)
+    thing = next(o for o in layout.objects if o.name == name)
+    return counter, (float(thing.position[0]), float(thing.position[1])), layout_map(layout)
+
+
+def test_a_chair_where_the_feet_go_moves_the_stance_to_a_free_one_with_the_object_still_in_reach() -> None:
+    counter, xy, blocked = at_the_counter(0, "green apple")
     assert stance_taken(grasp_stance(xy, counter.approach[2], blocked), blocked)  # the chair
 
     stance = grasp_stance_facing_any(xy, stance_facings(counter.approach[2], counter.surface, xy), blocked)
@@ -45,11 +49,7 @@ def test_a_chair_where_the_feet_go_moves_the_stance_to_a_free_one_with_the_objec
 
 
 def test_a_stance_that_is_free_is_kept_as_it_was() -> None:
-    layout = generate_world(0)
-    counter = next(p for p in layout.places if p.name == "kitchen counter")
-    mug = next(o for o in layout.objects if o.name == "red mug")
-    xy = (float(mug.position[0]), float(mug.position[1]))
-    blocked = layout_map(layout)
+    counter, xy, blocked = at_the_counter(0, "red mug")
     facings = stance_facings(counter.approach[2], counter.surface, xy)
     assert grasp_stance_facing_any(xy, facings, blocked) == grasp_stance(xy, counter.approach[2], blocked)
     # nothing free anywhere: the usual stance, for the caller to say there is no room
