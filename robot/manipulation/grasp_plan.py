@@ -112,14 +112,19 @@ def stance_facings(approach_yaw: float, surface: Box | None, object_xy: tuple[fl
             ((cy + hy) - y, -math.pi / 2),
         )
         for depth, yaw in sorted(sides):
-            if depth <= OBJECT_FROM_EDGE_MAX_M and not _same_yaw(yaw, approach_yaw):
+            if depth <= OBJECT_FROM_EDGE_MAX_M and not same_facing(yaw, approach_yaw):
                 facings.append(yaw)
     facings += [approach_yaw + turn for turn in TURNED_FACINGS_RAD[2:]]
     return facings
 
 
-def _same_yaw(a: float, b: float) -> bool:
-    return abs(math.remainder(a - b, math.tau)) < 0.1
+# Two facings closer than this (rad) are one: the usual stance's, not another side's or a turned one.
+SAME_FACING_RAD = 0.1
+
+
+def same_facing(a: float, b: float) -> bool:
+    """Whether two yaws face the same way (within SAME_FACING_RAD)."""
+    return abs(math.remainder(a - b, math.tau)) < SAME_FACING_RAD
 
 
 def grasp_stance_facing_any(

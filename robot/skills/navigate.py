@@ -11,7 +11,7 @@ from typing import Any
 from robot.control.head import DEFAULT_TILT
 from robot.control.locomotion import Velocity, clip_velocity
 from robot.interface import NavigationState
-from robot.manipulation.grasp_plan import CARRY_HAND_AHEAD_M
+from robot.manipulation.grasp_plan import CARRY_HAND_AHEAD_M, same_facing
 from robot.model.world import FEET_REACH_M, ROBOT_RADIUS, Box, Place, WorldLayout, is_mat, near_mat_edges
 from robot.navigation.costmap import Costmap
 from robot.navigation.follower import MAX_FORWARD_M_S
@@ -33,9 +33,8 @@ from robot.skills.body import BodyParts, Legs, Localiser, PerceptionView
 
 CARRY_CLEARANCE_M = 0.02  # between the carried object and a surface's edge, before turning away from it
 MIN_STEP_BACK_M = 0.04
-# A work pose facing a place within this of its approach is walked onto from the place's staging point; one facing
-# it another way from a point this far behind it (the nearest free on the map).
-SAME_FACING_RAD = 0.1
+# A work pose facing a place as its approach does (`same_facing`) is walked onto from the place's staging point; one
+# facing it another way from a point this far behind it (the nearest free on the map).
 WORK_STAGING_BACK_M = (0.12, 0.25, 0.4)
 # A place on a mat (the dock's pad) is walked onto straight along its heading, from this far beyond the mat's edge
 # (the feet 10 cm off it): a path ending on the mat came at it aslant, a foot landed on its corner, the trunk tilted
@@ -302,7 +301,7 @@ class NavigateSkill:
         another side of the surface, as a chair stood where the feet usually go): then a free point behind it along
         its heading. From the place's staging, the walk onto a stance round the counter's end went straight through
         the chair (world seed 0)."""
-        if work is None or abs(math.remainder(work[2] - place.approach[2], math.tau)) < SAME_FACING_RAD:
+        if work is None or same_facing(work[2], place.approach[2]):
             return place.staging
         costmap = self.legs_and_map(ctx).costmap(ROBOT_RADIUS + CLEARANCE_M)
         c, s = math.cos(work[2]), math.sin(work[2])
