@@ -10,6 +10,7 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 
+from robot.bodies.hardware import ESTOP_TORQUE_OFF_AFTER_S
 from robot.hardware import control_table as ct
 from robot.hardware.bus import BusError, DynamixelBus, tick_budget
 from robot.hardware.bus_emulator import BusEmulator
@@ -20,6 +21,10 @@ from robot.model import humanoid_v1
 
 # The emulator answers when the scheduler lets it: a busy test machine needs more than the 2 ms a real servo gets.
 CONFIG = dataclasses.replace(default_config(), reply_margin_ms=100.0)
+# Tests that watch the controlled stop's crouch give it the real robot's time before torque goes off: the crouch
+# advances by control ticks, and beside stress-ng a fresh-clone CI's loop ticked too few in 1 s for the knee to
+# bend visibly before torque went off (the crouch check timed out).
+CROUCH_BEFORE_TORQUE_OFF_S = ESTOP_TORQUE_OFF_AFTER_S
 
 
 def wait(predicate, timeout: float = 30.0):  # generous: a loaded machine
@@ -194,7 +199,7 @@ def test_a_stalled_control_loop_is_stopped_by_the_servos_then_crouches_and_turns
     where they are on their own; when the loop comes back it takes that as a loss of control: e-stop, crouch,
     torque off."""
     config = dataclasses.replace(CONFIG, port=emulator.port_name, bus_watchdog_ms=100)
-    robot = HardwareWorker(config, layout, estop_torque_off_s=1.0, deadman_s=0.0)
+    robot = HardwareWorker(config, layout, estop_torque_off_s=CROUCH_BEFORE_TORQUE_OFF_S, deadman_s=0.0)
     robot.start()
     try:
         robot.submit(SetTorque(True))
@@ -236,7 +241,7 @@ def test_a_robot_process_started_on_servos_left_holding_takes_them_over_then_mak
     first.bus.close()
     wait(lambda: all(emulator.read(j.servo_id, ct.BUS_WATCHDOG) == -1 for j in CONFIG.joints))  # tripped
     assert all(torque_on(emulator))
-    second = HardwareWorker(config, layout, estop_torque_off_s=1.0, deadman_s=0.0)
+    second = HardwareWorker(config, layout, estop_torque_off_s=CROUCH_BEFORE_TORQUE_OFF_S, deadman_s=0.0)
     second.start()
     try:
         takeover = next(e for e in second.recent_events() if e.kind == "hardware/takeover")
