@@ -221,8 +221,13 @@ def comfortably_in_reach(object_in_feet: np.ndarray, margin: float = REACH_MARGI
     )
 
 
-def grasp_height(object_height: float) -> float:
-    """Where on the object the fingers close, above its base (m): a little above the middle, under the rim."""
+def grasp_height(object_height: float, round_object: bool = False) -> float:
+    """Where on the object the fingers close, above its base (m): a little above the middle, under the rim; a round
+    object at its widest. The flat pads squeeze a ball out towards whichever side of its middle they close on:
+    an apple gripped 1 cm above it (a retried pick closed high) worked its way down between the pads as the robot
+    walked and fell out."""
+    if round_object:
+        return object_height / 2.0
     return min(0.6 * object_height, object_height - 0.015)
 
 
@@ -260,10 +265,14 @@ def arm_out_moves() -> list[Move]:
     ]
 
 
-def grasp_moves(object_in_feet: np.ndarray, object_height: float) -> tuple[list[Move], np.ndarray]:
+def grasp_moves(
+    object_in_feet: np.ndarray, object_height: float, round_object: bool = False
+) -> tuple[list[Move], np.ndarray]:
     """Pre-grasp, approach and close on an object whose base centre is at `object_in_feet`; returns the moves and
     the hand's grasp point."""
-    grasp = np.asarray(object_in_feet, dtype=float) + np.array([PAST_AXIS_M, 0.0, grasp_height(object_height)])
+    grasp = np.asarray(object_in_feet, dtype=float) + np.array(
+        [PAST_AXIS_M, 0.0, grasp_height(object_height, round_object)]
+    )
     height = trunk_height_for(float(grasp[2]))
     open_ = humanoid_v1.FINGER_TRAVEL
     pre = grasp + np.array([-APPROACH_BACK_M, 0.0, APPROACH_UP_M])
@@ -309,11 +318,13 @@ PLACE_ABOVE_M = 0.04  # the object is carried over its spot this high above wher
 SET_DOWN_ABOVE_M = 0.004  # released this far above the surface: the fingers do not scrape it
 
 
-def place_moves(spot_in_feet: np.ndarray, object_height: float) -> tuple[list[Move], np.ndarray]:
+def place_moves(
+    spot_in_feet: np.ndarray, object_height: float, round_object: bool = False
+) -> tuple[list[Move], np.ndarray]:
     """Carry the held object over the spot (feet frame, on the surface), lower it, let go and back away; returns the
     moves and the hand's release point."""
     release = np.asarray(spot_in_feet, dtype=float) + np.array(
-        [PAST_AXIS_M, 0.0, grasp_height(object_height) + SET_DOWN_ABOVE_M]
+        [PAST_AXIS_M, 0.0, grasp_height(object_height, round_object) + SET_DOWN_ABOVE_M]
     )
     height = trunk_height_for(float(release[2]))
     above = release + np.array([0.0, 0.0, PLACE_ABOVE_M])

@@ -71,8 +71,9 @@ class PickReport:
     stance_corrections: int
 
 
-def pick(name: str, height: float, body: PickBody) -> PickReport:
-    """Pick up the object `name` (`height` tall); on failure the arm is stowed and PickFailed says why."""
+def pick(name: str, height: float, body: PickBody, round_object: bool = False) -> PickReport:
+    """Pick up the object `name` (`height` tall, a ball if `round_object`); on failure the arm is stowed and
+    PickFailed says why."""
     corrections = 0
     seen = body.locate(name)
     if seen is None:
@@ -89,7 +90,7 @@ def pick(name: str, height: float, body: PickBody) -> PickReport:
         seen = body.locate(name)
         if seen is None:
             raise PickFailed(f"not found: lost sight of the {name} at the counter")
-    moves, grasp = grasp_moves(in_feet, height)
+    moves, grasp = grasp_moves(in_feet, height, round_object)
     try:
         body.arm([*arm_out_moves(), *moves])
         grip = body.grip_opening()

@@ -66,8 +66,11 @@ class PlaceReport:
     stance_corrections: int
 
 
-def place(name: str, height: float, spot: np.ndarray, facing_yaw: float, body: PlaceBody) -> PlaceReport:
-    """Put the held object `name` (`height` tall) down with its base centre at `spot` (map, on a surface)."""
+def place(
+    name: str, height: float, spot: np.ndarray, facing_yaw: float, body: PlaceBody, round_object: bool = False
+) -> PlaceReport:
+    """Put the held object `name` (`height` tall, a ball if `round_object`) down with its base centre at `spot`
+    (map, on a surface)."""
     spot = np.asarray(spot, dtype=float)
     corrections = 0
     for attempt in range(STANCE_ATTEMPTS + 1):
@@ -79,7 +82,7 @@ def place(name: str, height: float, spot: np.ndarray, facing_yaw: float, body: P
             raise PlaceFailed(f"unreachable: the spot is {problem} after {corrections} stance corrections")
         body.go_to(grasp_stance((float(spot[0]), float(spot[1])), facing_yaw), spot)
         corrections += 1
-    moves, _ = place_moves(in_feet, height)
+    moves, _ = place_moves(in_feet, height, round_object)
     body.arm(moves)
     body.stow_arm(finish_in_background=True)  # a spoken confirmation that follows need not wait for the arm
     seen = body.locate(name, near=spot)

@@ -107,6 +107,11 @@ class WorldObject:
     position: tuple[float, float, float]  # centre of the body's base, world frame
     yaw: float = 0.0  # about the vertical; a mug's handle points along the body's +x
 
+    @property
+    def round(self) -> bool:
+        """A ball (the apple), not an upright cylinder: grasped at its widest."""
+        return self.shape == "apple"
+
 
 @dataclass(frozen=True)
 class WorldLayout:

@@ -69,7 +69,7 @@ class ManipulateSkill:
         if held is not None:
             raise StepFailed(f"already holding the {held}: place it first")
         try:
-            report = pick(name, obj.height, self.arm_body(ctx))
+            report = pick(name, obj.height, self.arm_body(ctx), round_object=obj.round)
         except BaseException as exc:  # failed, cancelled or stopped midway: the fingers may have closed on it yet
             if self._parts.arm.grasping():
                 self._parts.arm.hold_object(name)
@@ -109,7 +109,7 @@ class ManipulateSkill:
         if spot is None:
             raise StepFailed(f"unreachable: no free spot on the {place.name} in front of the robot")
         try:
-            report = place_held(held, obj.height, spot, place.approach[2], self.arm_body(ctx))
+            report = place_held(held, obj.height, spot, place.approach[2], self.arm_body(ctx), round_object=obj.round)
         except BaseException as exc:  # failed, cancelled or stopped midway: the hand may have let go of it already
             if not self._parts.arm.grasping():
                 self._parts.arm.hold_object(None)
