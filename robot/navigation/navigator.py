@@ -253,11 +253,14 @@ def _away_from_nearest(costmap: Costmap, x: float, y: float, within_m: float) ->
     return (2 * x - float(nx), 2 * y - float(ny))
 
 
-def _clearest_step(costmap: Costmap, x: float, y: float, step_m: float, within_m: float) -> tuple[float, float] | None:
-    """Of the points `step_m` from (x, y) all round, the one farthest from every obstacle cell within `within_m`
-    (None if there is none that near). Stepping away from the nearest cell alone, the robot turning in a corner by
-    the dock stepped from a box 0.30 m away towards the wall 0.33 m away, and a finger touched the wall (patrol,
-    world seed 103)."""
+def _clearest_step(
+    costmap: Costmap, x: float, y: float, step_m: float, within_m: float, off_limits: Costmap | None = None
+) -> tuple[float, float] | None:
+    """Of the points `step_m` from (x, y) all round whose way there is free on `off_limits` (where a foot would be
+    on a mat's edge), the one farthest from every obstacle cell within `within_m`; (x, y) itself if none is free;
+    None if no cell is that near. Stepping away from the nearest cell alone, the robot turning in a corner by the
+    dock stepped from a box 0.30 m away towards the wall 0.33 m away, and a finger touched the wall (patrol, world
+    seed 103); the most open floor in a corner is often the dock's pad, and a foot on its edge tips the robot over."""
     i, j = costmap.cell(x, y)
     r = math.ceil((within_m + step_m) / costmap.resolution)
     lo_i, lo_j = max(0, i - r), max(0, j - r)
@@ -269,6 +272,14 @@ def _clearest_step(costmap: Costmap, x: float, y: float, step_m: float, within_m
         return None
     angles = np.linspace(0.0, 2.0 * math.pi, STEP_CLEAR_DIRECTIONS, endpoint=False)
     candidates = np.column_stack([x + step_m * np.cos(angles), y + step_m * np.sin(angles)])
+    if off_limits is not None:
+        free = [
+            not any(off_limits.blocked_at(x + f * (cx - x), y + f * (cy - y)) for f in (0.5, 1.0))
+            for cx, cy in candidates
+        ]
+        candidates = candidates[np.array(free, dtype=bool)]
+        if len(candidates) == 0:
+            return x, y
     clearance = np.min(
         np.hypot(candidates[:, None, 0] - points[None, :, 0], candidates[:, None, 1] - points[None, :, 1]), axis=1
     )
@@ -593,9 +604,14 @@ class Navigator:
         body = self.body
         costmap = body.costmap(0.0, off_mat_edges=False)
         x, y, yaw = body.pose()
-        away = _clearest_step(costmap, x, y, STEP_CLEAR_M, STEP_CLEAR_SEARCH_M) if costmap is not None else None
+        standing = body.costmap(0.0)  # with the mats' edges, where no foot goes
+        away = (
+            _clearest_step(costmap, x, y, STEP_CLEAR_M, STEP_CLEAR_SEARCH_M, standing) if costmap is not None else None
+        )
         if away is None:
             away = (x - math.cos(yaw), y - math.sin(yaw))  # nothing mapped near: straight back
+        if away == (x, y):
+            return  # no step that keeps the feet off the mats' edges: it turns where it stands
         dx, dy = away[0] - x, away[1] - y
         norm = math.hypot(dx, dy) or 1.0
         c, s = math.cos(yaw), math.sin(yaw)

@@ -205,6 +205,22 @@ def test_a_robot_that_steps_clear_between_two_things_steps_to_where_both_are_fur
     assert report.final_error_m < 0.1
 
 
+def test_a_robot_stepping_clear_keeps_its_feet_off_a_mats_edge() -> None:
+    """The open floor away from a chair behind it is the dock's pad ahead: the step goes elsewhere (a foot on the
+    pad's edge tips the robot over)."""
+    chair = _map_with((-0.27, 0.0))
+    pad_edge = np.zeros_like(chair.blocked)
+    for x in np.arange(0.08, 0.3, 0.05):
+        for y in np.arange(-0.1, 0.11, 0.05):
+            pad_edge[chair.cell(float(x), float(y))] = True
+    body = MappedBody(chair, mat_edges=pad_edge)
+    report = Navigator(body, lambda: body.t).go((0.0, 1.0))  # to its left: a quarter turn in place first
+    first_turn = next(i for i, (vx, vy, w) in enumerate(body.commands) if vx == vy == 0 != w)
+    assert math.hypot(*body.track[first_turn][:2]) > 0.05  # it stepped clear of the chair...
+    assert not any(pad_edge[chair.cell(x, y)] for x, y, _ in body.track[: first_turn + 1])  # ...not onto the edge
+    assert report.final_error_m < 0.1
+
+
 def _turns_where_it_stands(body: MappedBody) -> bool:
     first_move = next(i for i, command in enumerate(body.commands) if command != (0.0, 0.0, 0.0))
     vx, vy, w = body.commands[first_move]
