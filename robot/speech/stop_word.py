@@ -106,19 +106,17 @@ class StopSpotter:
     ) -> None:
         import pocketsphinx
 
-        from robot.speech.sphinx import PocketSphinxASR
+        from robot.speech.sphinx import PocketSphinxASR, grammar_decoder
 
-        self._dir = tempfile.TemporaryDirectory(prefix="humanoid-stop-")
-        keyphrases = Path(self._dir.name) / "stop.kws"
         limits = {**KWS_THRESHOLDS, **(thresholds or {})}
-        keyphrases.write_text("".join(f"{phrase} /{limits[phrase]:g}/\n" for phrase in STOP_PHRASES))
-        self._spotter = pocketsphinx.Decoder(kws=str(keyphrases), loglevel="FATAL", dither=False)
+        # the spotter reads its phrases from a file as it is built; the folder goes at once (see grammar_decoder)
+        with tempfile.TemporaryDirectory(prefix="humanoid-stop-") as folder:
+            keyphrases = Path(folder) / "stop.kws"
+            keyphrases.write_text("".join(f"{phrase} /{limits[phrase]:g}/\n" for phrase in STOP_PHRASES))
+            self._spotter = pocketsphinx.Decoder(kws=str(keyphrases), loglevel="FATAL", dither=False)
         self._grammar = PocketSphinxASR(objects, places, free_speech=False)
-        grammar_path = self._grammar.grammar.write(Path(self._dir.name) / "commands.gram")
         # the same grammar decoded as the audio comes, with the grammar recogniser's wide beams: the fast verdict
-        self._streamed = pocketsphinx.Decoder(
-            jsgf=str(grammar_path), beam=1e-80, wbeam=1e-60, pbeam=1e-80, bestpath=False, loglevel="FATAL", dither=False
-        )
+        self._streamed = grammar_decoder(self._grammar.grammar, bestpath=False, loglevel="FATAL", dither=False)
         self._lock = threading.Lock()
         self._pieces: list[np.ndarray] = []
 

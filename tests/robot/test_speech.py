@@ -361,3 +361,18 @@ def test_whispers_prompt_names_every_thing_and_place_and_the_longer_names_people
     assert "the water bottle" in prompt and "the charging station" in prompt  # aliases of more than one word
     assert prompt.count("the living room table") == 1  # a name said once, whichever table it came from
     assert len(prompt.split()) < 120  # whisper keeps at most 223 tokens of a prompt
+
+
+def test_the_recognisers_leave_no_files_behind_and_still_hear(world, tmp_path, monkeypatch) -> None:
+    # their decoders read the grammar and the stop phrases from files as they are built: a folder kept for the
+    # recogniser's life was left in /tmp by every robot process that was killed (190 in a day of test runs here)
+    import tempfile
+
+    from robot.speech.stop_word import StopSpotter
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    asr = PocketSphinxASR(world.objects, world.places)
+    spotter = StopSpotter(world.objects, world.places)
+    assert list(tmp_path.iterdir()) == []
+    assert asr.transcribe(synthesize_audio("go to the charging dock", "en-us", 160)).text == "go to the charging dock"
+    assert spotter.spot(_padded("stop", "en-us", 160)).stop
