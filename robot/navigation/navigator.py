@@ -235,22 +235,14 @@ class _TurnWatch:
         return now - self.since > TURN_STALL_S
 
 
-def _away_from_nearest(costmap: Costmap, x: float, y: float, within_m: float) -> tuple[float, float] | None:
-    """A point leading away from the obstacle cell nearest (x, y) within `within_m`, or None if none is that near."""
+def _obstacle_points(costmap: Costmap, x: float, y: float, within_m: float) -> np.ndarray:
+    """The centres (n x 2) of the blocked cells within `within_m` of (x, y) (a square window, then the distance)."""
     i, j = costmap.cell(x, y)
     r = math.ceil(within_m / costmap.resolution)
     lo_i, lo_j = max(0, i - r), max(0, j - r)
-    window = costmap.blocked[lo_i : i + r + 1, lo_j : j + r + 1]
-    cells = np.argwhere(window)
-    if len(cells) == 0:
-        return None
-    points = np.array([costmap.centre(lo_i + a, lo_j + b) for a, b in cells])
-    distances = np.hypot(points[:, 0] - x, points[:, 1] - y)
-    k = int(np.argmin(distances))
-    if distances[k] > within_m:
-        return None
-    nx, ny = points[k]
-    return (2 * x - float(nx), 2 * y - float(ny))
+    cells = np.argwhere(costmap.blocked[lo_i : i + r + 1, lo_j : j + r + 1])
+    points = np.array([costmap.centre(lo_i + a, lo_j + b) for a, b in cells]).reshape(-1, 2)
+    return points[np.hypot(points[:, 0] - x, points[:, 1] - y) <= within_m]
 
 
 def _clearest_step(
@@ -261,15 +253,9 @@ def _clearest_step(
     None if no cell is that near. Stepping away from the nearest cell alone, the robot turning in a corner by the
     dock stepped from a box 0.30 m away towards the wall 0.33 m away, and a finger touched the wall (patrol, world
     seed 103); the most open floor in a corner is often the dock's pad, and a foot on its edge tips the robot over."""
-    i, j = costmap.cell(x, y)
-    r = math.ceil((within_m + step_m) / costmap.resolution)
-    lo_i, lo_j = max(0, i - r), max(0, j - r)
-    cells = np.argwhere(costmap.blocked[lo_i : i + r + 1, lo_j : j + r + 1])
-    if len(cells) == 0:
+    if len(_obstacle_points(costmap, x, y, within_m)) == 0:
         return None
-    points = np.array([costmap.centre(lo_i + a, lo_j + b) for a, b in cells])
-    if float(np.min(np.hypot(points[:, 0] - x, points[:, 1] - y))) > within_m:
-        return None
+    points = _obstacle_points(costmap, x, y, within_m + step_m)  # all that can be near any step's end
     angles = np.linspace(0.0, 2.0 * math.pi, STEP_CLEAR_DIRECTIONS, endpoint=False)
     candidates = np.column_stack([x + step_m * np.cos(angles), y + step_m * np.sin(angles)])
     if off_limits is not None:
@@ -597,7 +583,7 @@ class Navigator:
         if standing is not None and standing.blocked_at(x, y):
             return True  # by a mat's edge (or inside an obstacle's cell, as the map has it): turn where it stands
         obstacles = self.body.costmap(0.0, off_mat_edges=False)
-        return obstacles is None or _away_from_nearest(obstacles, x, y, self.turn_room_m) is None
+        return obstacles is None or len(_obstacle_points(obstacles, x, y, self.turn_room_m)) == 0
 
     def _step_clear(self) -> None:
         """Walk a little to where the map leaves the most room all round (`_clearest_step`)."""
