@@ -205,6 +205,32 @@ def test_a_robot_that_steps_clear_between_two_things_steps_to_where_both_are_fur
     assert report.final_error_m < 0.1
 
 
+def test_a_robot_that_must_turn_round_close_to_a_table_steps_back_until_it_has_room_to_turn() -> None:
+    """A tour stood 0.12 m from the living-room table's edge: stepping 10 cm back left it 0.25 m away, and a finger
+    touched the table as it turned round to leave (world seeds 0, 7 and 9)."""
+    edge = [(0.15, y / 20.0) for y in range(-10, 11)]
+    body = MappedBody(_map_with(*edge))
+    cells = np.array([body.map.centre(i, j) for i, j in np.argwhere(body.map.blocked)])
+    report = Navigator(body, lambda: body.t).go((-1.0, 0.0))  # behind it: a half turn in place first
+    turning = [(x, y) for (x, y, _), (vx, vy, w) in zip(body.track, body.commands, strict=True) if vx == vy == 0 != w]
+    assert turning
+    assert min(float(np.min(np.hypot(cells[:, 0] - x, cells[:, 1] - y))) for x, y in turning) >= TURN_ROOM_M
+    assert report.final_error_m < 0.1
+
+
+def test_a_robot_stepping_clear_stops_before_it_nears_something_else() -> None:
+    """Between a table ahead and a chair 0.45 m behind there is no room to turn anywhere: it steps back no nearer
+    the chair than the table."""
+    edge = [(0.15, y / 20.0) for y in range(-10, 11)]
+    body = MappedBody(_map_with(*edge, (-0.45, 0.0)))
+    cells = np.array([body.map.centre(i, j) for i, j in np.argwhere(body.map.blocked)])
+    Navigator(body, lambda: body.t).go((-1.0, 0.6))
+    turning = [(x, y) for (x, y, _), (vx, vy, w) in zip(body.track, body.commands, strict=True) if vx == vy == 0 != w]
+    x, y = turning[0]
+    assert math.dist((x, y), body.map.centre(*body.map.cell(-0.45, 0.0))) > 0.2
+    assert float(np.min(np.hypot(cells[:, 0] - x, cells[:, 1] - y))) > 0.2
+
+
 def test_a_robot_stepping_clear_keeps_its_feet_off_a_mats_edge() -> None:
     """The open floor away from a chair behind it is the dock's pad ahead: the step goes elsewhere (a foot on the
     pad's edge tips the robot over)."""
