@@ -229,6 +229,33 @@ class NavigateSkill:
         here = body.pose()[:2]
         return min(ways, key=lambda way: math.dist(way[0], here), default=None)
 
+    def _off_mat(self, navigator: Navigator, goal: tuple[float, float], ctx: ExecutionContext) -> NavigationReport:
+        """From a mat (standing on it, bound away from it), straight off it across an edge, turned to that edge on
+        the mat first: the edge it faces if its way off is clear on the map, else the one nearest that. Setting off
+        along a planned path, the robot turned on the dock's pad towards its next place and walked off over the pad's
+        edge aslant (tours fell leaving the dock on world seeds 0 and 3)."""
+        report = NavigationReport()
+        body = self.legs_and_map(ctx)
+        x, y, yaw = body.pose()
+        mat = next((box for box in self._layout.furniture if is_mat(box) and box.contains(x, y)), None)
+        if mat is None or mat.contains(*goal, FEET_REACH_M):
+            return report
+        costmap = body.costmap(ROBOT_RADIUS, off_mat_edges=False)
+        edges = sorted((k * math.pi / 2 for k in range(-1, 3)), key=lambda h: abs(math.remainder(h - yaw, math.tau)))
+        for heading in edges:
+            way_off = entry_along(mat, x, y, heading)
+            if costmap is not None and not _clear_line(costmap, (x, y), way_off):
+                continue
+            steps = [(*way_off, heading)]
+            if not same_facing(heading, yaw):
+                steps.insert(0, (x, y, heading))  # turned where it stands, on the mat
+            for step in steps:
+                walked = navigator.step_to(step)
+                report.walked_m += walked.walked_m
+                report.sim_s += walked.sim_s
+            return report
+        return report
+
     def navigate_to(self, args: dict[str, str], ctx: ExecutionContext) -> str:
         """Walk to a named place: a planned path to the open floor in front of it, then a short precise
         approach."""
@@ -242,6 +269,7 @@ class NavigateSkill:
         self._parts.head.point(0.0, DEFAULT_TILT)  # look ahead and down while walking
         try:
             navigator = self.navigator(ctx)
+            leaving = self._off_mat(navigator, (pose.x, pose.y) if pose is not None else place.approach[:2], ctx)
             if pose is not None:  # a pose on the map: walk there, then turn to its heading if it has one
                 costmap = self.legs_and_map(ctx).costmap(ROBOT_RADIUS, off_mat_edges=False)
                 if costmap is not None and costmap.blocked_at(pose.x, pose.y):
@@ -275,6 +303,8 @@ class NavigateSkill:
             raise StepFailed(str(exc)) from exc
         finally:
             self.end()
+        report.walked_m += leaving.walked_m
+        report.sim_s += leaving.sim_s
         replans = f", {report.replans} replan{'s' if report.replans != 1 else ''}" if report.replans else ""
         where = f"the {place.name}" if place is not None else f"({pose.text()})" if pose is not None else ""
         self._publish(

@@ -11,7 +11,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from robot.interface import ExecutePlan, PlanState
+from robot.interface import ExecutePlan, PlanState, StepState
 from robot.model.world import DOCK_PAD, FEET_REACH_M, generate_world, near_mat_edges
 from robot.navigation.costmap import Costmap
 from robot.navigation.navigator import plan_path
@@ -93,21 +93,22 @@ def test_a_path_past_the_pad_keeps_the_feet_off_its_edge() -> None:
     assert not any(costmap.blocked_at(*p) for p in along)
 
 
-def _walk_near_the_pad(seed: int, target: str):
-    """Walk to `target` on world `seed`; the final state, and where the robot was (x, y, estimated yaw) while off
-    the pad with a foot within reach of its edge."""
+def _walk_near_the_pad(seed: int, *targets: str):
+    """Walk to each of `targets` in turn on world `seed`; the final state, and where the robot was (x, y, estimated
+    yaw) while off the pad with a foot within reach of its edge, on the way to the last."""
     layout = generate_world(seed)
     worker = RobotWorker(layout, backend=MujocoSimBackend(layout), realtime=False)
     worker.start()
     near_pad: list[tuple[float, float, float]] = []
 
     def ended(state) -> bool:
-        if 0.0 < _beyond_edge(state.base_position[:2]) < FEET_REACH_M:  # off the pad, a foot within reach of it
+        last = state.plan is not None and state.plan.steps[-1].state == StepState.RUNNING
+        if last and 0.0 < _beyond_edge(state.base_position[:2]) < FEET_REACH_M:  # off the pad, a foot near it
             near_pad.append((*state.base_position[:2], state.locomotion.estimated_pose[2]))
         return state.plan is not None and state.plan.state != PlanState.RUNNING
 
     try:
-        steps = [{"action": "navigate_to", "args": {"target": target}}]
+        steps = [{"action": "navigate_to", "args": {"target": target}} for target in targets]
         assert worker.submit(ExecutePlan({"steps": steps})).accepted
         assert worker.wait_for(ended, 400)
         return worker.state(), near_pad
@@ -144,3 +145,17 @@ def test_a_pose_typed_on_the_dock_is_walked_onto_squarely_along_its_heading() ->
     north_edge = DOCK_PAD.y + DOCK_PAD.half_y
     assert all(y > north_edge and abs(x - DOCK_PAD.x) < 0.08 for x, y, _ in near_pad), near_pad
     assert all(abs(math.degrees(yaw) - 90.0) < 12.0 for *_, yaw in near_pad), near_pad
+
+
+def test_the_robot_walks_off_the_dock_squarely_the_way_it_faces() -> None:
+    """World 2, from the dock to the kitchen counter (across the room, north-east): setting off along its path, the
+    robot turned on the pad towards the counter and walked off over the pad's edge aslant (tours fell leaving the
+    dock). It walks off ahead, over the edge it faces, in line and turned to it, never by the pad's corners."""
+    dock = _dock(2)
+    state, near_pad = _walk_near_the_pad(2, "charging dock", "kitchen counter")
+    assert state.plan.state == PlanState.SUCCEEDED, [step.detail for step in state.plan.steps]
+    assert not state.fallen
+    assert near_pad
+    east_edge = DOCK_PAD.x + DOCK_PAD.half_x
+    assert all(x > east_edge and abs(y - dock.approach[1]) < 0.08 for x, y, _ in near_pad), near_pad
+    assert all(abs(math.degrees(yaw)) < 12.0 for *_, yaw in near_pad), near_pad
