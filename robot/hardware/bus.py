@@ -30,11 +30,16 @@ from robot.hardware.xm430 import HardwareError
 log = logging.getLogger(__name__)
 
 LOST_AFTER_FAILED_READS = 3
-PING_ATTEMPTS = 3
+# A reply is also lost when the host is late, not the servo: the SDK reads the port, and if the host is descheduled
+# past the packet's timeout (~34 ms) before it looks at the clock, the reply that came meanwhile is a timeout (the
+# suite beside stress-ng and two simulations: a servo missing from `hardware check` after 3 pings, a read lost 5
+# times in a row). Asked again, a servo that is there answers.
+PING_ATTEMPTS = 5
 # A servo that answered its ping is there: a read of it is asked this often before it fails, waiting twice as long
 # after each miss (a loaded computer missed three replies in a row once, in the test suite beside two simulations).
-READ_ATTEMPTS = 5
+READ_ATTEMPTS = 7
 LATE_REPLY_WAIT_S = 0.05  # after a missed reply: how long to let it arrive late before dropping it
+LATE_REPLY_MAX_WAIT_S = 0.4  # ... doubled after each miss, up to this
 FAST = (ct.PRESENT_CURRENT.address, 10)  # current (2), velocity (4), position (4): every tick
 POSITION_CONTROL_MODE = 3
 SLOW_ERRORS = (ct.HARDWARE_ERROR_STATUS.address, 1)
@@ -222,7 +227,7 @@ class DynamixelBus:
             value, result, _ = self.packets.read1ByteTxRx(self.port, joint.servo_id, field.address)
             if result == COMM_SUCCESS:
                 return value
-            self._drop_late_reply(LATE_REPLY_WAIT_S * 2**attempt)
+            self._drop_late_reply(min(LATE_REPLY_WAIT_S * 2**attempt, LATE_REPLY_MAX_WAIT_S))
         raise BusError(f"servo {joint.servo_id} ({joint.joint}): {self.packets.getTxRxResult(result)}")
 
     def _drop_late_reply(self, wait_s: float = LATE_REPLY_WAIT_S) -> None:

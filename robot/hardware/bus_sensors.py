@@ -23,7 +23,7 @@ from robot.sensors.imu import ImuSample
 log = logging.getLogger(__name__)
 
 LOST_AFTER_FAILED_READS = 3
-PING_ATTEMPTS = 3
+PING_ATTEMPTS = 5  # see robot.hardware.bus.PING_ATTEMPTS
 INSTRUCTION_OVERHEAD_BYTES = 10
 BULK_PARAMS_PER_DEVICE = 5
 STATUS_OVERHEAD_BYTES = 11
