@@ -321,6 +321,10 @@ def test_sessions_page_shows_the_timeline_and_replays_from_an_entry(page, server
     entry.click(force=True)
     expect(page.locator("#replay-time")).to_contain_text(f"{target:.2f} /")
     expect(entry).to_have_class(re.compile("tl-active"))
+    # the view is looked at, as an operator would: clicking the entry scrolled the page down to it, and Chromium
+    # draws no frames for a cross-site frame out of sight, while viser applies what its server sends only as it
+    # draws one (an idle fresh-clone CI: "Connected", and neither scene nor panel after 240 s)
+    page.locator("#replay-frame").scroll_into_view_if_needed()
     frame = page.frame_locator("#replay-frame")
     # a viser page in software WebGL, in its own renderer: on a busy machine it takes long (a fresh-clone suite
     # beside two fetch simulations: connected, but neither its scene nor its panel shown after 90 s)
