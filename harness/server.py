@@ -17,30 +17,33 @@ import httpx
 STARTUP_TIMEOUT_S = 120.0
 
 
-# (below the kernel's ephemeral ports, 32768 and up, which a server binding port 0 gets)
-PORTS_FROM = 20000
+# Ports below the kernel's ephemeral ones (32768 and up): a port the kernel chose for a bind to port 0 may be handed
+# to an outgoing connection (the server's own, the browser's) before the server binds it (a bench's replay view
+# once could not listen: "address already in use").
+PORTS_FROM = 20000  # pytest-xdist workers: 2000 each
 PORTS_PER_WORKER = 2000
-_port_turn = itertools.count(os.getpid() % PORTS_PER_WORKER)
+SOLO_PORTS_FROM = 10000  # anything else (benches, a test run without workers)
+SOLO_PORTS = 10000
+_port_turn = itertools.count(os.getpid())
 
 
 def free_port() -> int:
     """A port free now. Under pytest-xdist each test process takes its ports from a range of its own, so two
     processes never pick the same port between choosing it and binding it (the kernel's own choice could)."""
     worker = os.environ.get("PYTEST_XDIST_WORKER", "")
-    if not worker.startswith("gw"):
-        with socket.socket() as sock:
-            sock.bind(("127.0.0.1", 0))
-            return int(sock.getsockname()[1])
-    first = PORTS_FROM + int(worker[2:]) * PORTS_PER_WORKER
-    for _ in range(PORTS_PER_WORKER):
-        port = first + next(_port_turn) % PORTS_PER_WORKER
+    if worker.startswith("gw"):
+        first, count = PORTS_FROM + int(worker[2:]) * PORTS_PER_WORKER, PORTS_PER_WORKER
+    else:
+        first, count = SOLO_PORTS_FROM, SOLO_PORTS
+    for _ in range(count):
+        port = first + next(_port_turn) % count
         with socket.socket() as sock:
             try:
                 sock.bind(("127.0.0.1", port))
             except OSError:
                 continue
             return port
-    raise RuntimeError(f"no free port in {first}-{first + PORTS_PER_WORKER - 1}")
+    raise RuntimeError(f"no free port in {first}-{first + count - 1}")
 
 
 class ServerProcess:
