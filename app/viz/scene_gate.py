@@ -5,7 +5,9 @@ HTTP request and WebSocket to a 3D view comes through a gate that:
   viser the address without it;
 - turns a click in the 3D view into a call with who clicked (`on_click`), instead of letting viser act on it with
   nobody's authority: a click is then a command like any other (operator role, control, e-stop rules);
-- closes the connections of a login that ended (`revoke`).
+- closes the connections of a login that ended (`revoke`);
+- adds to viser's page the script that keeps an unchanged view from being redrawn every second
+  (`app.viz.idle_redraw`).
 
 It runs its own event loop on a thread of the process that serves the views (the mirrors' process for the live
 views: the pages' 3D traffic never touches the web server's event loop). Scene data from viser to the browser is
@@ -26,6 +28,15 @@ from collections.abc import Callable
 import msgspec
 
 from app.auth.scene_tokens import SceneGrant
+from app.viz.idle_redraw import (
+    IDLE_REDRAW_S,
+    add_script,
+    content_length,
+    idle_redraw_script,
+    is_page,
+    is_plain_ok,
+    with_body,
+)
 
 log = logging.getLogger(__name__)
 
@@ -58,6 +69,7 @@ class SceneGate:
         verify: Callable[[str], SceneGrant | None],
         on_click: ClickHandler | None = None,
         tls: ssl.SSLContext | None = None,
+        idle_redraw_s: float = IDLE_REDRAW_S,
     ) -> None:
         self.name = name
         self._host = host
@@ -66,6 +78,7 @@ class SceneGate:
         self._verify = verify
         self._on_click = on_click
         self._tls = tls
+        self._page_script = idle_redraw_script(idle_redraw_s)
         self.port = 0
         self._loop: asyncio.AbstractEventLoop | None = None
         self._thread: threading.Thread | None = None
@@ -150,6 +163,9 @@ class SceneGate:
             return
         grant, upstream_target = admitted
         websocket = any(k == "upgrade" and v.lower() == "websocket" for k, v in headers)
+        page = not websocket and method == "GET" and is_page(upstream_target)
+        if page:  # asked for as is, so that the script can go in
+            headers = [(k, v) for k, v in headers if k != "accept-encoding"]
         try:
             up_reader, up_writer = await asyncio.open_connection("127.0.0.1", self._upstream_port)
         except OSError:
@@ -161,6 +177,8 @@ class SceneGate:
         try:
             if websocket:
                 await _first_done(_copy(up_reader, writer), self._client_frames(reader, up_writer, grant))
+            elif page:
+                await _copy_page(up_reader, writer, self._page_script)
             else:
                 await _copy_response(up_reader, writer)
         finally:
@@ -321,6 +339,20 @@ async def _copy_response(src: asyncio.StreamReader, dst: asyncio.StreamWriter) -
         head = await src.readuntil(b"\r\n\r\n")
         dst.write(head[:-2] + SECURITY_HEADERS + b"\r\n")
         await _copy(src, dst)
+
+
+async def _copy_page(src: asyncio.StreamReader, dst: asyncio.StreamWriter, script: bytes) -> None:
+    """viser's page with `script` added (as `_copy_response` otherwise)."""
+    with contextlib.suppress(asyncio.IncompleteReadError, asyncio.LimitOverrunError, ConnectionError):
+        head = await src.readuntil(b"\r\n\r\n")
+        length = content_length(head)
+        if length is None or not is_plain_ok(head):
+            dst.write(head[:-2] + SECURITY_HEADERS + b"\r\n")
+            await _copy(src, dst)
+            return
+        body = add_script(await src.readexactly(length), script)
+        dst.write(with_body(head, body)[:-2] + SECURITY_HEADERS + b"\r\n" + body)
+        await dst.drain()
 
 
 async def _cancel_others() -> None:

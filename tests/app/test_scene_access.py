@@ -7,10 +7,12 @@ import asyncio
 import socket
 import time
 from collections.abc import Iterator
+from pathlib import Path
 
 import httpx
 import msgspec
 import pytest
+import viser
 import websockets
 from fastapi.testclient import TestClient
 from viser._messages import ScenePointerMessage, ViewerCameraMessage
@@ -18,6 +20,15 @@ from viser._messages import ScenePointerMessage, ViewerCameraMessage
 from app.auth.roles import Principal, Role
 from app.auth.scene_tokens import SceneTokens
 from app.runtime import Runtime
+from app.viz.idle_redraw import (
+    IDLE_REDRAW_S,
+    add_script,
+    content_length,
+    idle_redraw_script,
+    is_page,
+    is_plain_ok,
+    with_body,
+)
 from app.viz.scene_gate import admit, build_request_head, parse_request_head, pointer_click, unmask
 from app.web.api.scene import other_site
 from app.web.main import create_app
@@ -120,3 +131,42 @@ def test_no_3d_view_opens_without_a_login_and_a_viewer_cannot_walk_the_robot(sec
     asyncio.run(shift_click(view_url(ports[0], ada["token"]), *floor))
     plan = wait_until(lambda: rt.worker.state().plan, timeout=10)
     assert "clicked in the 3D view" in plan.command_text and rt.control.holder.name == "ada"
+
+
+def test_every_3d_view_page_carries_the_script_that_stops_redrawing_an_unchanged_scene_every_second(
+    secured_views,
+) -> None:
+    client, rt = secured_views
+    ada = login(client, "ada")
+    shipped = (Path(viser.__file__).parent / "client" / "build" / "index.html").read_bytes()
+    for view in ("full", "light", "replay"):
+        response = httpx.get(
+            f"http://127.0.0.1:{rt.scene_port(view)}/s/{ada['token']}/?fixedDpr=0.5",
+            headers={"Accept-Encoding": "gzip"},  # as browsers ask: viser would compress it
+            timeout=10,
+        )
+        assert response.status_code == 200 and response.headers["content-encoding"] == "identity"
+        assert int(response.headers["content-length"]) == len(response.content)
+        # viser's page unchanged but for the script, which runs before the client's own code
+        assert response.content == add_script(shipped, idle_redraw_script(IDLE_REDRAW_S))
+        assert response.content.index(b"__humanoidIdleRedraw") < response.content.index(b"<script data-p")
+        assert response.headers["cache-control"] == "no-store"
+
+
+def test_the_page_script_goes_only_into_a_plain_page_and_keeps_its_length_right() -> None:
+    script = idle_redraw_script(30)
+    assert b"everyMs: 30000" in script
+    with pytest.raises(ValueError):
+        idle_redraw_script(0.5)  # more often than viser's own 1 s is no saving
+    assert add_script(b"<html><head><title>v</title></head></html>", b"<s>") == (
+        b"<html><head><s><title>v</title></head></html>"
+    )
+    assert add_script(b"<p>no head</p>", b"<s>") == b"<s><p>no head</p>"
+    head = b"HTTP/1.1 200 OK\r\nContent-Type: text/html\r\nContent-Length: 5\r\n\r\n"
+    assert content_length(head) == 5 and is_plain_ok(head)
+    assert content_length(with_body(head, b"1234567")) == 7
+    assert with_body(head, b"1234567").startswith(b"HTTP/1.1 200 OK\r\nContent-Type: text/html\r\n")
+    assert not is_plain_ok(head.replace(b"Content-Length", b"Content-Encoding: gzip\r\nContent-Length"))
+    assert not is_plain_ok(b"HTTP/1.1 404 NOT FOUND\r\nContent-Length: 9\r\n\r\n")
+    assert content_length(b"HTTP/1.1 200 OK\r\nContent-Length: x\r\n\r\n") is None
+    assert is_page("/") and is_page("/?fixedDpr=0.5") and is_page("/index.html") and not is_page("/assets/a.js")

@@ -53,6 +53,9 @@ def test_the_3d_mirror_renders_in_a_cross_site_frame(page, server) -> None:
     expected = re.compile(rf"http://localhost:{server.viser_light_port}/s/[\w.-]+/\?fixedDpr=0\.5")
     playwright_api.expect(page.locator("#scene")).to_have_attribute("src", expected)
     assert wait_for_scene_render(page) > 8.0
+    # an unchanged view is redrawn every 10 s, not every second: the gate's script found viser's redraw timer
+    view = next(f for f in page.frames if f.url.startswith(f"http://localhost:{server.viser_light_port}/s/"))
+    assert view.evaluate("window.__humanoidIdleRedraw") == {"stretched": 1, "everyMs": 10_000}
     # the link's round trip is shown with the connection
     playwright_api.expect(page.locator("#conn")).to_have_text(re.compile(r"connected · \d+ ms"), timeout=10_000)
 
