@@ -4,7 +4,7 @@ object where perception localised it (a box and a label).
 Viewers re-render on every update, in software on machines without a GPU, so nothing is sent unless it changed
 visibly: the scan when the robot moved or the scene did, the map when what it shows changed (unknown, free,
 occupied: an occupancy value that drifts within its class is not a change; the few cells at the edge of the lidar's
-reach that flicker while the robot stands still wait up to 10 s) and at most once a second, objects when they
+reach that flicker while the robot stands still wait up to a minute) and at most once a second, objects when they
 moved. Each update a view receives makes it render for a quarter of a second: a map resent twice a second kept
 every idle view rendering all the time, 70 % of a core of software WebGL for two views (`humanoid bench core`).
 """
@@ -35,7 +35,8 @@ OCCUPIED_FROM = 67  # occupancy (0-100) from which a cell is drawn occupied; -1 
 MAP_REDRAW_MIN_S = 1.0  # a map growing while the robot explores is redrawn at most this often
 MAP_CHANGED_SHARE = 0.01  # a redraw needs this share of the known cells changed (or MAP_CHANGED_CELLS) ...
 MAP_CHANGED_CELLS = 20
-MAP_REFRESH_S = 10.0  # ... or this long since the last one: a flickering cell or two can wait
+MAP_REFRESH_S = 60.0  # ... or this long since the last one: a flickering cell or two can wait (each resend
+# made every idle view draw ~6 frames in software WebGL, more than viser's own idle redraw: `app.viz.idle_redraw`)
 UNKNOWN, FREE, OCCUPIED = 0, 1, 2
 
 
