@@ -50,6 +50,10 @@ class PickBody(Protocol):
         """Where to stand to grasp the object there: square to its surface, further right beside a wall on the left
         (`grasp_plan.grasp_stance` on the robot's map)."""
 
+    def sideways_clear(self) -> bool:
+        """Whether nothing on the map stands where the right arm swings out sideways from where the robot stands
+        (`grasp_plan.arm_sweep_taken`); True with no map yet."""
+
     def arm(self, moves: Sequence[Move]) -> None:
         """Play arm moves (the arm takes over the joints first) and return when they are done."""
 
@@ -92,7 +96,7 @@ def pick(name: str, height: float, body: PickBody, round_object: bool = False) -
             raise PickFailed(f"not found: lost sight of the {name} at the counter")
     moves, grasp = grasp_moves(in_feet, height, round_object)
     try:
-        body.arm([*arm_out_moves(), *moves])
+        body.arm([*arm_out_moves(body.sideways_clear()), *moves])
         grip = body.grip_opening()
         if grip < EMPTY_GRIP_M:
             raise PickFailed(f"grasp failed: the gripper closed on nothing ({grip * 2000:.0f} mm open)")

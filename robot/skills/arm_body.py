@@ -13,6 +13,7 @@ from robot.control.head import DEFAULT_TILT
 from robot.manipulation.arm_motion import Move
 from robot.manipulation.grasp_plan import (
     Stance,
+    arm_sweep_taken,
     carry_moves,
     comfortably_in_reach,
     grasp_stance,
@@ -86,6 +87,18 @@ class ArmBody:
     def comfortably_reaches(self, point_in_map: np.ndarray) -> bool:
         """Whether the right hand reaches the map point from where the robot stands, with a margin to spare."""
         return comfortably_in_reach(self.to_feet(point_in_map))
+
+    def sideways_clear(self) -> bool:
+        blocked = self._blocked()
+        return blocked is None or not arm_sweep_taken(self.feet_stance(), blocked)
+
+    def feet_stance(self) -> Stance:
+        """Where the feet stand now (their centre and heading, map frame), by the localiser."""
+        position, rotation = self._parts.localiser.map_trunk()
+        feet_in_trunk = np.linalg.inv(self._parts.arm.motion().trunk_in_feet(self._parts.arm.joint_positions()))
+        centre = rotation @ feet_in_trunk[:3, 3] + position
+        axes = rotation @ feet_in_trunk[:3, :3]
+        return Stance(float(centre[0]), float(centre[1]), float(math.atan2(axes[1, 0], axes[0, 0])))
 
     def go_to(self, stance: Stance, reach: np.ndarray | None = None) -> None:
         blocked = self._blocked()

@@ -197,6 +197,10 @@ class ManipulateSkill:
         return known is not None and arm.comfortably_reaches(np.asarray(known.position, dtype=float))
 
     def map_blocked(self) -> Callable[[float, float], bool] | None:
-        """Whether a map point is taken on the lidar map (obstacles not grown); None before the first map."""
+        """Whether a map point is taken on the lidar map (obstacles not grown) or by the apartment's walls; None
+        before the first map."""
         grid = self._parts.perception.feed().map if self._parts.perception is not None else None
-        return None if grid is None else Costmap.from_map(grid, 0.0).blocked_at
+        if grid is None:
+            return None
+        on_map, walls = Costmap.from_map(grid, 0.0).blocked_at, self._layout.in_or_beyond_walls
+        return lambda x, y: on_map(x, y) or walls(x, y)
