@@ -9,7 +9,11 @@ from pathlib import Path
 
 
 def run_suite(suite: str, args: argparse.Namespace) -> int:
-    if suite == "core":
+    if suite == "core" and args.backend == "hil":
+        from bench.hil_estop import run_hil_estop
+
+        result = run_hil_estop(presses=args.presses, duration_s=args.duration or 30.0, seed=args.seed or 0)
+    elif suite == "core":
         from bench.core import run_core
 
         result = run_core(presses=args.presses, viewers=args.viewers or 2, duration_s=args.duration or 30.0)

@@ -58,6 +58,8 @@ def _one_rate(baudrate: int, seconds: float, fast: bool, sensors: bool = False) 
                 t0 = time.perf_counter()
                 bus.write_goals(goals)
                 bus.read()
+                if bus.slow_due:  # the monitoring blocks in turn, as the backend reads them after a tick
+                    bus.read_slow()
                 if sensors:
                     t1 = time.perf_counter()
                     boards.read()
@@ -73,6 +75,8 @@ def _one_rate(baudrate: int, seconds: float, fast: bool, sensors: bool = False) 
                 bus.write_goals(goals)
                 bus.read()
                 boards.read()
+                if bus.slow_due:
+                    bus.read_slow()
                 paced += 1
                 time.sleep(max(0.0, next_tick - time.perf_counter()))
             busy = (emulator.stats().busy_s - busy0) / (time.perf_counter() - wall0)

@@ -197,6 +197,7 @@ class Robot(InProcessPort):
             after_tick=self.ticker.after_tick,
             guard=body.tick_guard,
             stats=self.stats,
+            tick_on_wake=config.realtime and body.stop_by_tick,
         )
         self.latch.on_latch(self.loop.wake)  # the control thread applies the stop now, not at its next tick
         self._voice: RobotVoice | None = None  # the robot's microphone and speaker, opened on start

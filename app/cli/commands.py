@@ -518,7 +518,8 @@ def build_parser() -> argparse.ArgumentParser:
         choices=["sim", "hil"],
         default="sim",
         help="walk: sim (the simulation's own loop) or hil (the real-robot backend through the hardware-in-the-loop "
-        "rig, one script at a time)",
+        "rig, one script at a time); core: hil times the e-stop from the page to the servo bus, the console served "
+        "as the real robot on the rig in real time",
     )
     bench.add_argument(
         "--lockstep",

@@ -51,6 +51,9 @@ from robot.sim.backend import MujocoSimBackend
 ESTOP_TORQUE_OFF_AFTER_S = 3.0  # the controlled stop's crouch has this long before torque goes off
 DEADMAN_S = 1.5  # torque on needs an operator heartbeat at least this often (the page sends one every 250 ms)
 CONTROLLED_STOP_SPEED_RAD_S = 0.6
+# A slow block is read after a tick only with its wire time and this much more left before the next tick (its
+# packets' handling in Python takes about 0.5-1 ms; the rest is room for a late wake-up).
+SLOW_READ_MARGIN_S = 0.002
 BUS_WARN_SHARE = 0.8  # the bus's round trip at p99 past this share of the control period is said
 UPRIGHT_TILT_DEG = 15.0  # a fallen robot stood up again by hand may move again below this tilt
 NOT_ON_HARDWARE = "needs the IMU, cameras and foot sensors, which are not on the servo bus: simulation only for now"
@@ -70,6 +73,7 @@ class HardwareBody:
     resettable = False
     latch_words = HARDWARE_WORDS
     physics_hz = 0.0
+    stop_by_tick = True
     telemetry = None
 
     def __init__(
@@ -104,6 +108,8 @@ class HardwareBody:
         self._started_at = time.monotonic() if started_at is None else started_at
         self._torque = False
         self._estop_since: float | None = None
+        self._stop_applied_at: float | None = None  # wall clock; until the stop's first goals are on the bus
+        self._stop_written_at: float | None = None  # wall clock: the stop's goals written by `hold_now`
         self._reading: BusReading | None = None
         self._positions = np.zeros(len(self.joint_names))
         self._targets = self._positions.copy()
@@ -120,6 +126,7 @@ class HardwareBody:
         self._walking_enabled = walking_enabled
         self.tick_split = BusTickStats()  # each tick's time on the bus, and the rest
         self._bus_s = 0.0
+        self._tick_started = 0.0  # when this tick's read began (perf_counter)
         self._trunk_estimate: Callable[[], tuple[np.ndarray, np.ndarray]] | None = None
         self._zero_velocities = np.zeros(n)
         self._load_pct = np.zeros(n)
@@ -342,7 +349,7 @@ class HardwareBody:
             self.links.latch.latch(EStop(source="deadman", reason=reason))
 
     def sense(self) -> Measurements:
-        started = time.perf_counter()
+        started = self._tick_started = time.perf_counter()
         reading = self.bus.read()
         newly_lost = set(reading.lost) - set(self._reading.lost if self._reading is not None else ())
         self._reading = reading
@@ -381,21 +388,55 @@ class HardwareBody:
                 started = time.perf_counter()
                 self.bus.write_goals(targets)
                 self._bus_s += time.perf_counter() - started
+                if self._stop_applied_at is not None:  # a stop while walking: the step's next goals
+                    self._stop_on_bus(time.time())
         else:
             self._targets = self._positions.copy()  # goal follows the limp robot: enabling torque holds it there
             self.links.hold(self._targets)
         return self.latest()
 
     def hold_now(self, targets: np.ndarray) -> None:
-        """The controlled stop moves on the posture controller: nothing to send at once."""
+        """The stop's first goals, on the bus at once (the loop holds the bus's lock); the move to the stop
+        posture follows tick by tick on the posture controller."""
+        if self._torque:
+            self._targets = targets
+            self.bus.write_goals(targets)
+            self._stop_written_at = time.time()
 
     def stop_applied(self) -> None:
         self._estop_since = time.monotonic()
+        self._stop_applied_at = time.time()  # (the clock the latch says the stop was applied by)
+        if self._stop_written_at is not None:
+            self._stop_on_bus(self._stop_written_at)
+
+    def _stop_on_bus(self, written_at: float) -> None:
+        """Said once the controlled stop's first goals are written: where an e-stop really reaches the robot
+        (timed from when the stop was applied: written just before, by `hold_now`, it is a hair below zero)."""
+        assert self._stop_applied_at is not None
+        after_ms = (written_at - self._stop_applied_at) * 1e3
+        self._stop_applied_at = self._stop_written_at = None
+        when = f"{after_ms:.1f} ms after the stop was applied" if after_ms > 0 else "as the stop was applied"
+        message = f"the controlled stop's first goals are on the bus, {when}"
+        self.links.publish("hardware/stop_on_bus", message, after_applied_ms=round(after_ms, 3))
 
     def after_tick(self, targets: np.ndarray, tick_s: float) -> None:
         """The tick's bus time and compute (no battery model or telemetry on the real robot yet)."""
         self.tick_split.record(self._bus_s, tick_s)
         self._bus_s = 0.0
+        self._read_monitoring()
+
+    def _read_monitoring(self) -> None:
+        """The servos' slow blocks (hardware errors, voltage, temperature) in the tick's slack, after the goals
+        are out: read inside the tick they made about one tick in 70 miss its deadline on the rig at 2 Mbps.
+        A tick without room for one defers it (`DynamixelBus.slow_overdue` bounds how long)."""
+        bus = self.bus
+        if not bus.slow_due:
+            return
+        spent_s = time.perf_counter() - self._tick_started
+        if spent_s + bus.slow_read_s() + SLOW_READ_MARGIN_S > self.dt and not bus.slow_overdue:
+            return
+        with self.bus_lock:
+            bus.read_slow()
 
     def snapshot(self, measured: Measurements) -> BodySnapshot:
         sensed = bool(np.isfinite(measured.imu_quat).all())

@@ -51,6 +51,7 @@ class SimBody:
 
     kind = "simulation"
     resettable = True
+    stop_by_tick = False  # the stop's targets go into the physics at once (`hold_now`)
     senses = Senses(imu=True, foot_sensors=True)
     lacks = ""
     latch_words = LatchWords()

@@ -153,7 +153,8 @@ class JointArbiter:
 
     def controlled_stop(self) -> tuple[bool, np.ndarray | None]:
         """Control thread, on an e-stop: whether the legs were walking (a biped mid-stride cannot freeze its
-        joints: it finishes the step and puts its feet together), and the targets to hold at once, if any."""
+        joints: it finishes the step and puts its feet together), and the targets to hold at once, if any (none
+        while walking: the step's next targets are the stop)."""
         if self.head is not None:
             self.head.freeze()
         with self._lock:
@@ -173,7 +174,7 @@ class JointArbiter:
             self._posture_name = None  # (the body's stop posture is not the stance to balance)
             self._posture.hold(self._targets)
             self._posture.move_to(goal, speed)
-            return False, None
+            return False, self._targets.copy()  # held at once; the move to the stop posture starts next tick
         return False, self._posture.freeze()
 
     def fell(self) -> None:

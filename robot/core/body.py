@@ -85,6 +85,9 @@ class Body(Protocol):
     lacks: str  # why what the body cannot do is refused ("" when it can do everything)
     latch_words: LatchWords
     physics_hz: float
+    # its controlled stop reaches the actuators only with a tick (the real robot's goals go out on the bus in the
+    # tick): on an e-stop the loop ticks at once instead of at its next deadline
+    stop_by_tick: bool
     perception: PerceptionService | None
     telemetry: TelemetrySampler | None
 

@@ -28,7 +28,8 @@ class ControlLoop:
 
     `on_wake`: run when `wake()` cuts a sleep short; `pace`: run before each headless tick; `after_tick`: run
     with each tick's duration (book-keeping that must not count in the tick); `guard`: held around each tick and
-    wake-up (the real robot's bus lock)."""
+    wake-up (the real robot's bus lock); `tick_on_wake`: after `on_wake`, tick at once and keep the pace from there
+    (a body whose stop reaches its actuators only with a tick: the real robot's goals go out on its bus then)."""
 
     def __init__(
         self,
@@ -43,6 +44,7 @@ class ControlLoop:
         after_tick: Callable[[float], None] | None = None,
         guard: contextlib.AbstractContextManager | None = None,
         stats: LoopStats | None = None,
+        tick_on_wake: bool = False,
     ) -> None:
         self.hz = hz
         self.dt = 1.0 / hz
@@ -55,6 +57,7 @@ class ControlLoop:
         self._pace = pace
         self._after_tick = after_tick
         self._guard = guard if guard is not None else contextlib.nullcontext()
+        self._tick_on_wake = tick_on_wake
         self._wake = threading.Event()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -110,6 +113,8 @@ class ControlLoop:
                         if self._on_wake is not None and not self._stop.is_set():
                             with guard:
                                 self._on_wake()
+                            if self._tick_on_wake:
+                                next_deadline = time.perf_counter()
                     continue
             elif self._pace is not None:
                 self._pace()

@@ -44,7 +44,10 @@ FAST = (ct.PRESENT_CURRENT.address, 10)  # current (2), velocity (4), position (
 POSITION_CONTROL_MODE = 3
 SLOW_ERRORS = (ct.HARDWARE_ERROR_STATUS.address, 1)
 SLOW_POWER = (ct.PRESENT_INPUT_VOLTAGE.address, 3)  # voltage (2), temperature (1)
-SLOW_EVERY = 10  # ticks between two reads of each slow block
+SLOW_EVERY = 10  # ticks between two reads of each slow block (one of the two every SLOW_EVERY // 2 ticks)
+# A slow block is read in a tick's slack; when the ticks leave none this many ticks in a row, it is read anyway
+# (a servo's hardware error or temperature is then said at most about this late).
+SLOW_MAX_DEFER_TICKS = 50
 STATUS_OVERHEAD_BYTES = 11  # header, ID, length, instruction, error, CRC of a status packet
 FAST_STATUS_HEADER_BYTES = 8  # one header, ID, length and instruction for all the servos of a Fast Sync Read
 FAST_STATUS_PER_SERVO_BYTES = 4  # error, ID, CRC
@@ -177,6 +180,8 @@ class DynamixelBus:
             np.zeros(n), np.zeros(n), np.zeros(n), np.full(n, np.nan), np.full(n, np.nan), np.zeros(n, dtype=np.int64)
         )
         self._tick = 0
+        self._slow_tick = 0  # the tick of the last slow block read
+        self._slow_turn = 0  # which slow block is next
         self.counters = BusCounters()
         self._fast: GroupSyncRead | None = None
         self._is_open = False
@@ -316,14 +321,11 @@ class DynamixelBus:
         return (time.perf_counter() - started) * 1e3
 
     def read(self) -> BusReading:
-        """This tick's reading (the last good values stand in for a servo that did not answer this time)."""
+        """This tick's reading: current, velocity and position (the last good values stand in for a servo that
+        did not answer this time); the hardware errors, voltages and temperatures as `read_slow` last read them."""
         started = time.perf_counter()
         self._tick += 1
         failed = self._read_block(self._fast, FAST)
-        if self._tick % SLOW_EVERY == 3:
-            failed += self._read_block(self._reader(*SLOW_ERRORS), SLOW_ERRORS)
-        elif self._tick % SLOW_EVERY == 7:
-            failed += self._read_block(self._reader(*SLOW_POWER), SLOW_POWER)
         self.counters.ticks += 1
         self.counters.failed_reads += failed
         last = self._last  # the arrays kept up to date by _store; copied so the caller's cannot change under it
@@ -338,6 +340,33 @@ class DynamixelBus:
             failed_reads=failed,
             read_ms=(time.perf_counter() - started) * 1e3,
         )
+
+    @property
+    def slow_due(self) -> bool:
+        """A slow block is due: one of the two every SLOW_EVERY // 2 ticks."""
+        return self._tick - self._slow_tick >= SLOW_EVERY // 2
+
+    @property
+    def slow_overdue(self) -> bool:
+        """No slow block for SLOW_MAX_DEFER_TICKS ticks: read one whatever the tick's time."""
+        return self._tick - self._slow_tick >= SLOW_MAX_DEFER_TICKS
+
+    def slow_read_s(self) -> float:
+        """What the larger slow block's read takes on the wire, with the USB latency (the caller's margin aside)."""
+        servos = sum(not h.lost for h in self._health.values())
+        wire_bytes = max(read_bytes(servos, n, self.config.fast_sync_read) for _, n in (SLOW_ERRORS, SLOW_POWER))
+        return wire_bytes * 10 / self.config.baudrate + self.config.latency_timer_ms / 1e3
+
+    def read_slow(self) -> int:
+        """The next slow block in turn (the hardware errors, then voltage and temperature), read apart from the
+        tick's own read so that the control path never waits for it (see `slow_due`). Returns the servos that
+        failed."""
+        block = (SLOW_ERRORS, SLOW_POWER)[self._slow_turn]
+        self._slow_turn = 1 - self._slow_turn
+        self._slow_tick = self._tick
+        failed = self._read_block(self._reader(*block), block)
+        self.counters.failed_reads += failed
+        return failed
 
     def reboot(self, joint: str) -> bool:
         """Reboot one servo (clears a latched hardware error; its torque comes back off). It is read again."""

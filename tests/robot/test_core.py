@@ -55,6 +55,7 @@ class JointsOnlyBody:
     lacks = LACKS
     latch_words = LatchWords(latched="e-stop latched: freezing")
     physics_hz = 0.0
+    stop_by_tick = False
     perception = None
     telemetry = None
     tick_guard = None
@@ -342,5 +343,31 @@ def test_the_loop_survives_a_failing_tick_and_wakes_early_for_a_stop() -> None:
         headless.stop()
         assert len(ticks) >= 10 and [str(e) for e in errors] == ["third tick"]
         assert headless.stats.tick_count >= 9 and not headless.is_alive()
+    finally:
+        loop.stop()
+
+
+def test_a_body_that_stops_with_a_tick_is_ticked_as_soon_as_the_stop_wakes_the_loop() -> None:
+    """The real robot's stop reaches its servos only with a tick's write: woken by an e-stop, the loop ticks at
+    once rather than at its next deadline (here 100 s away), then keeps its pace from there."""
+    ticks: list[float] = []
+    woken = threading.Event()
+    loop = ControlLoop(
+        0.01,
+        True,
+        lambda: ticks.append(time.monotonic()),
+        lambda exc: None,
+        lambda *a, **k: None,
+        on_wake=woken.set,
+        tick_on_wake=True,
+    )
+    loop.start()
+    try:
+        loop.wake()
+        assert woken.wait(30.0)
+        deadline = time.monotonic() + 30.0
+        while not ticks and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert len(ticks) == 1
     finally:
         loop.stop()

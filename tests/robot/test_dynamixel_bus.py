@@ -9,7 +9,7 @@ from collections.abc import Iterator
 import pytest
 
 from robot.hardware import control_table as ct
-from robot.hardware.bus import DynamixelBus
+from robot.hardware.bus import SLOW_EVERY, DynamixelBus
 from robot.hardware.bus_emulator import BusEmulator
 from robot.hardware.config import default_config
 from robot.hardware.xm430 import HardwareError
@@ -76,3 +76,42 @@ def test_a_servo_that_answered_is_read_though_four_replies_in_a_row_are_lost(rig
     emulator.set_fault(bus.joints[2].servo_id, drop_replies=4)
     bus.prepare()
     assert all(s.hardware_error == 0 and s.firmware == 48 for s in by_id(bus).values())
+
+
+def test_a_tick_reads_what_control_needs_and_the_monitoring_comes_apart(rig) -> None:
+    """A tick's read asks current, velocity and position only (one Fast Sync Read, one reply); the hardware
+    errors, voltages and temperatures come from `read_slow`, one block in turn when due, and show in the next
+    reading. Read inside the tick, those blocks made about one tick in 70 late on the rig at 2 Mbps."""
+    emulator, bus = rig
+    hot = bus.joints[2].servo_id
+    index = [j.servo_id for j in bus.joints].index(hot)
+    emulator.set_temperature(hot, 85.0)  # past its 80 °C limit: an overheating error too
+    replies = emulator.stats().replies
+    for _ in range(SLOW_EVERY):
+        reading = bus.read()
+    assert emulator.stats().replies - replies == SLOW_EVERY  # no monitoring read went with the ticks
+    assert not reading.temperatures_c[index] >= 85.0  # not read yet
+    assert bus.slow_due
+    bus.read_slow()  # the hardware errors
+    assert not bus.slow_due
+    assert HardwareError(int(bus.read().hardware_errors[index])) & HardwareError.OVERHEATING
+    while not bus.slow_due:
+        bus.read()
+    bus.read_slow()  # then voltage and temperature
+    reading = bus.read()
+    assert reading.temperatures_c[index] == pytest.approx(85.0, abs=1.0)
+    assert 10.0 < reading.voltages_v[index] < 14.0
+
+
+def test_monitoring_put_off_by_busy_ticks_is_read_anyway_in_the_end(rig) -> None:
+    """A tick without room defers the slow blocks; after SLOW_MAX_DEFER_TICKS ticks they are overdue and the body
+    reads one whatever the tick's time, so an overheating servo is still said."""
+    _, bus = rig
+    for _ in range(SLOW_EVERY):
+        bus.read()
+    assert bus.slow_due and not bus.slow_overdue
+    while not bus.slow_overdue:
+        bus.read()
+    bus.read_slow()
+    assert not bus.slow_due and not bus.slow_overdue
+    assert 0.0 < bus.slow_read_s() < 0.01  # 24 servos' replies at 2 Mbps, and the USB latency

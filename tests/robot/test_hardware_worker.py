@@ -142,6 +142,10 @@ def test_estop_crouches_then_turns_torque_off(robot, emulator) -> None:
     wait(lambda: robot.state().torque_enabled)
     assert robot.submit(EStop(source="test")).accepted
     wait(lambda: robot.state().mode == Mode.ESTOP)
+    # said once the stop's first goals are written to the servos (what `bench core --backend hil` times): standing,
+    # they are written as the stop is applied, not at the next tick
+    on_bus = wait(lambda: next((e for e in robot.recent_events() if e.kind == "hardware/stop_on_bus"), None))
+    assert on_bus.data["after_applied_ms"] <= 0.0 and "on the bus, as the stop was applied" in on_bus.message
     crouch_knee = humanoid_v1.stand_posture(humanoid_v1.CROUCH_KNEE_BEND)["l_knee"]
     wait(lambda: emulator.read(sid("l_knee"), ct.GOAL_POSITION) > ct.POSITION_CENTRE + 100)  # bending
     wait(lambda: not robot.state().torque_enabled)
