@@ -14,6 +14,7 @@ by the controlled stop. What it lacks (no IMU, no foot sensors, no legs' control
 
 from __future__ import annotations
 
+import contextlib
 import math
 import threading
 import time
@@ -405,6 +406,8 @@ class HardwareBody:
 
     def stop_applied(self) -> None:
         self._estop_since = time.monotonic()
+        if not self._torque:  # a limp robot: no goals to stop
+            return
         self._stop_applied_at = time.time()  # (the clock the latch says the stop was applied by)
         if self._stop_written_at is not None:
             self._stop_on_bus(self._stop_written_at)
@@ -435,7 +438,8 @@ class HardwareBody:
         spent_s = time.perf_counter() - self._tick_started
         if spent_s + bus.slow_read_s() + SLOW_READ_MARGIN_S > self.dt and not bus.slow_overdue:
             return
-        with self.bus_lock:
+        # (a port that is gone: the next tick's own read meets it, and says it)
+        with self.bus_lock, contextlib.suppress(OSError):
             bus.read_slow()
 
     def snapshot(self, measured: Measurements) -> BodySnapshot:
