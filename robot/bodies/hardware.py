@@ -52,9 +52,6 @@ from robot.sim.backend import MujocoSimBackend
 ESTOP_TORQUE_OFF_AFTER_S = 3.0  # the controlled stop's crouch has this long before torque goes off
 DEADMAN_S = 1.5  # torque on needs an operator heartbeat at least this often (the page sends one every 250 ms)
 CONTROLLED_STOP_SPEED_RAD_S = 0.6
-# A slow block is read after a tick only with its wire time and this much more left before the next tick (its
-# packets' handling in Python takes about 0.5-1 ms; the rest is room for a late wake-up).
-SLOW_READ_MARGIN_S = 0.002
 BUS_WARN_SHARE = 0.8  # the bus's round trip at p99 past this share of the control period is said
 UPRIGHT_TILT_DEG = 15.0  # a fallen robot stood up again by hand may move again below this tilt
 NOT_ON_HARDWARE = "needs the IMU, cameras and foot sensors, which are not on the servo bus: simulation only for now"
@@ -429,18 +426,11 @@ class HardwareBody:
         self._read_monitoring()
 
     def _read_monitoring(self) -> None:
-        """The servos' slow blocks (hardware errors, voltage, temperature) in the tick's slack, after the goals
-        are out: read inside the tick they made about one tick in 70 miss its deadline on the rig at 2 Mbps.
-        A tick without room for one defers it (`DynamixelBus.slow_overdue` bounds how long)."""
-        bus = self.bus
-        if not bus.slow_due:
-            return
-        spent_s = time.perf_counter() - self._tick_started
-        if spent_s + bus.slow_read_s() + SLOW_READ_MARGIN_S > self.dt and not bus.slow_overdue:
-            return
-        # (a port that is gone: the next tick's own read meets it, and says it)
-        with self.bus_lock, contextlib.suppress(OSError):
-            bus.read_slow()
+        """The servos' slow blocks (hardware errors, voltage, temperature) in the period's slack, after the goals
+        are out: read inside the tick they made about one tick in 70 miss its deadline on the rig at 2 Mbps."""
+        if self.bus.slow_due:  # (a port that is gone: the next tick's own read meets it, and says it)
+            with self.bus_lock, contextlib.suppress(OSError):
+                self.bus.read_slow_if_room(self.dt - (time.perf_counter() - self._tick_started))
 
     def snapshot(self, measured: Measurements) -> BodySnapshot:
         sensed = bool(np.isfinite(measured.imu_quat).all())

@@ -48,6 +48,9 @@ SLOW_EVERY = 10  # ticks between two reads of each slow block (one of the two ev
 # A slow block is read in a tick's slack; when the ticks leave none this many ticks in a row, it is read anyway
 # (a servo's hardware error or temperature is then said at most about this late).
 SLOW_MAX_DEFER_TICKS = 50
+# A slow block is read after a tick only with its wire time and this much more left before the next tick (its
+# packets' handling in Python takes about 0.5-1 ms; the rest is room for a late wake-up).
+SLOW_READ_MARGIN_S = 0.002
 STATUS_OVERHEAD_BYTES = 11  # header, ID, length, instruction, error, CRC of a status packet
 FAST_STATUS_HEADER_BYTES = 8  # one header, ID, length and instruction for all the servos of a Fast Sync Read
 FAST_STATUS_PER_SERVO_BYTES = 4  # error, ID, CRC
@@ -356,6 +359,14 @@ class DynamixelBus:
         servos = sum(not h.lost for h in self._health.values())
         wire_bytes = max(read_bytes(servos, n, self.config.fast_sync_read) for _, n in (SLOW_ERRORS, SLOW_POWER))
         return wire_bytes * 10 / self.config.baudrate + self.config.latency_timer_ms / 1e3
+
+    def read_slow_if_room(self, room_s: float) -> bool:
+        """The next slow block if one is due and its read fits in `room_s` with a margin, or whatever the room
+        if it is overdue; whether one was read."""
+        if not self.slow_due or (self.slow_read_s() + SLOW_READ_MARGIN_S > room_s and not self.slow_overdue):
+            return False
+        self.read_slow()
+        return True
 
     def read_slow(self) -> int:
         """The next slow block in turn (the hardware errors, then voltage and temperature), read apart from the
