@@ -294,7 +294,7 @@ class HardwareBody:
         now = time.perf_counter()
         gap, self._last_tick_s = now - (self._last_tick_s or now), now
         self._apply_torque_requests()
-        self._check_watchdog(gap)
+        self._check_watchdog(max(gap, self.bus.take_longest_silence_s()))
         self._check_deadman()
 
     def apply_requests(self) -> None:

@@ -188,6 +188,8 @@ class DynamixelBus:
         self.counters = BusCounters()
         self._fast: GroupSyncRead | None = None
         self._is_open = False
+        self._last_sent_s: float | None = None  # when the servos were last sent a packet
+        self._longest_silence_s = 0.0  # the longest time they heard nothing, since `take_longest_silence_s`
 
     # lifecycle ---------------------------------------------------------------------------------------------------
 
@@ -275,6 +277,7 @@ class DynamixelBus:
         """Every servo's bus watchdog to `milliseconds` (0: off), cleared first (a tripped one takes no new
         value, and no goals, until it is set to 0)."""
         units = round(milliseconds / ct.BUS_WATCHDOG_UNIT_MS)
+        self._sending()
         for value in (0, units) if units else (0,):
             writer = GroupSyncWrite(self.port, self.packets, ct.BUS_WATCHDOG.address, 1)
             for j in self.joints:
@@ -301,8 +304,23 @@ class DynamixelBus:
 
     # per tick ------------------------------------------------------------------------------------------------
 
+    def take_longest_silence_s(self) -> float:
+        """The longest the servos went without a packet since this was last asked: past their bus watchdog they
+        have stopped and take no goals. The control loop's own tick-to-tick gap can miss such a silence (a host
+        paused between one tick's last packet and the next tick's first, split across two ticks), and the servos
+        then ignored every goal after it: a loaded test run once froze a controlled stop that way."""
+        longest, self._longest_silence_s = self._longest_silence_s, 0.0
+        return longest
+
+    def _sending(self) -> None:
+        now = time.perf_counter()
+        if self._last_sent_s is not None:
+            self._longest_silence_s = max(self._longest_silence_s, now - self._last_sent_s)
+        self._last_sent_s = now
+
     def set_torque(self, enabled: bool) -> None:
         """Torque on or off for every servo that answers (one sync write, then checked)."""
+        self._sending()
         writer = GroupSyncWrite(self.port, self.packets, ct.TORQUE_ENABLE.address, 1)
         for j in self.joints:
             writer.addParam(j.servo_id, [int(enabled)])
@@ -313,6 +331,7 @@ class DynamixelBus:
     def write_goals(self, targets: np.ndarray) -> float:
         """Each target clamped to its joint's limits, converted to servo ticks, all in one sync write (ms taken)."""
         started = time.perf_counter()
+        self._sending()
         writer = GroupSyncWrite(self.port, self.packets, ct.GOAL_POSITION.address, 4)
         for j, value in zip(self.joints, targets, strict=True):
             if self._health[j.servo_id].lost or not np.isfinite(value):
@@ -327,6 +346,7 @@ class DynamixelBus:
         """This tick's reading: current, velocity and position (the last good values stand in for a servo that
         did not answer this time); the hardware errors, voltages and temperatures as `read_slow` last read them."""
         started = time.perf_counter()
+        self._sending()
         self._tick += 1
         failed = self._read_block(self._fast, FAST)
         self.counters.ticks += 1
@@ -375,6 +395,7 @@ class DynamixelBus:
         block = (SLOW_ERRORS, SLOW_POWER)[self._slow_turn]
         self._slow_turn = 1 - self._slow_turn
         self._slow_tick = self._tick
+        self._sending()
         failed = self._read_block(self._reader(*block), block)
         self.counters.failed_reads += failed
         return failed

@@ -4,6 +4,7 @@ when a reply is lost or comes late, as it does from a slow USB adapter or a load
 from __future__ import annotations
 
 import dataclasses
+import time
 from collections.abc import Iterator
 
 import pytest
@@ -120,3 +121,15 @@ def test_monitoring_put_off_by_busy_ticks_is_read_anyway_in_the_end(rig) -> None
     while not bus.slow_due:
         bus.read()
     assert bus.read_slow_if_room(bus.slow_read_s() + 0.005)  # room for it: read
+
+
+def test_the_longest_silence_the_servos_heard_is_told_once(rig) -> None:
+    """The robot asks how long the servos went without a packet (past their bus watchdog they take no goals); a
+    silence split across two ticks counts whole, and the answer starts again from zero once told."""
+    _, bus = rig
+    bus.read()
+    bus.take_longest_silence_s()
+    time.sleep(0.15)  # the host paused: the servos heard nothing
+    bus.read()
+    assert bus.take_longest_silence_s() >= 0.15
+    assert bus.take_longest_silence_s() == 0.0  # told once
