@@ -133,7 +133,8 @@ def _truth(
 
         obj = result["params"].get("object", "")
         position = np.array(backend.data.body(object_body_name(obj)).xpos, dtype=float)
-        near_hand = float(np.linalg.norm(position - np.array(backend.data.site("right_hand").xpos))) < HELD_M
+        hands = (np.array(backend.data.site(site).xpos) for site in ("right_hand", "left_hand"))
+        near_hand = min(float(np.linalg.norm(position - hand)) for hand in hands) < HELD_M
         held = judge.in_hand(object_body_name(obj)) or near_hand
         base = np.array(backend.data.qpos[:2], dtype=float)
         home = math.dist(tuple(base), layout.robot_start[:2]) < DELIVERED_M

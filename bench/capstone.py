@@ -78,7 +78,10 @@ def run_task(task: str, seed: int, timeout_s: float = 600.0) -> dict[str, Any]:
         mug = backend.data.body(object_body_name("red mug"))
         mug_position = np.array(mug.xpos, dtype=float)
         mug_tilt = math.degrees(math.acos(min(1.0, float(mug.xmat.reshape(3, 3)[2, 2]))))
-        hand = np.array(backend.data.site("right_hand").xpos, dtype=float)
+        hand = min(  # the hand holding it: the left one where the right one had no room to stand
+            (np.array(backend.data.site(site).xpos, dtype=float) for site in ("right_hand", "left_hand")),
+            key=lambda h: float(np.linalg.norm(mug_position - h)),
+        )
     finally:
         worker.stop()
     wall = time.perf_counter() - started

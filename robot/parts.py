@@ -15,6 +15,7 @@ from robot.core.arbiter import JointArbiter
 from robot.core.inbox import MotionInbox
 from robot.core.safety import SafetyLatch
 from robot.manipulation.arm_motion import ArmMotion, Move
+from robot.manipulation.grasp_plan import Hand
 from robot.perception.geometry import yaw_of
 from robot.perception.service import PerceptionService
 
@@ -51,7 +52,7 @@ class RobotLegs:
 
 
 class RobotArm:
-    """The right arm through the joint arbiter, and what its hand holds."""
+    """The arms through the joint arbiter, and what the reaching hand holds."""
 
     def __init__(self, arbiter: JointArbiter, joint_positions: Callable[[], np.ndarray]) -> None:
         self._arbiter = arbiter
@@ -83,8 +84,12 @@ class RobotArm:
     def motion(self) -> ArmMotion:
         return self._arbiter.arm_motion()
 
-    def take(self) -> ArmMotion:
-        return self._arbiter.take_arm()
+    @property
+    def hand(self) -> Hand:
+        return self._arbiter.hand
+
+    def take(self, hand: Hand | None = None) -> ArmMotion:
+        return self._arbiter.take_arm(hand)
 
     def release(self, upper_body: np.ndarray | None) -> None:
         self._arbiter.release_arm(upper_body)

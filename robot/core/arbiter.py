@@ -23,7 +23,7 @@ from robot.core.measurements import Measurements
 from robot.core.safety import SafetyLatch
 from robot.interface import Level, Posture
 from robot.manipulation.arm_motion import ArmMotion, Move
-from robot.manipulation.grasp_plan import carry_moves, grasping
+from robot.manipulation.grasp_plan import HANDS, Hand, carry_moves, grasping
 from robot.manipulation.stand_up import arm_back_moves, letting_go_out_in_front, standing_up_with
 
 # How fast the legs go from the walk's last posture to the standing one (rad/s): 0.34 rad in ~0.85 s when carrying.
@@ -83,7 +83,7 @@ class JointArbiter:
         # joints back: the robot's next body step waits for that.
         self._arm_finishing = False
         self._finish_keeps_upper_body = False  # the arm finishes carrying: walk with the upper body as it ends
-        self._grip = self.joint_names.index("r_grip") if "r_grip" in self.joint_names else None
+        self._grips = {h: self.joint_names.index(f"{h[0]}_grip") for h in HANDS if f"{h[0]}_grip" in self.joint_names}
         self._measured: np.ndarray | None = None  # the joints as last measured
 
     # ---------------------------------------------------------------------------------------------------------
@@ -273,21 +273,29 @@ class JointArbiter:
             return False
         self._held_reach = False
         holding = self.grasping()
+        side = self.hand
         if holding:
-            moves = standing_up_with(carry_moves(), self._default_stand)
+            moves = standing_up_with(carry_moves(side), self._default_stand)
         else:
             hand = self.arm_motion().placed_hand()
             let_go = letting_go_out_in_front(hand) if hand is not None else []
-            moves = [*let_go, *standing_up_with(arm_back_moves(), self._default_stand)]
+            moves = [*let_go, *standing_up_with(arm_back_moves(side), self._default_stand)]
         self.finish_arm_in_background(moves, keep_upper_body=holding)
         return True
 
+    @property
+    def hand(self) -> Hand:
+        """The hand the arm motion last reached with (the right one before any reach): the one that may hold
+        something."""
+        return "left" if self._arm is not None and self._arm.side == "left" else "right"
+
     def grasping(self) -> bool:
-        """Whether the right hand holds something, by its fingers (held apart while commanded tighter)."""
+        """Whether the reaching hand holds something, by its fingers (held apart while commanded tighter)."""
         measured = self._measured
-        if measured is None or self._grip is None:
+        grip = self._grips.get(self.hand)
+        if measured is None or grip is None:
             return False
-        return grasping(float(self._targets[self._grip]), float(measured[self._grip]))
+        return grasping(float(self._targets[grip]), float(measured[grip]))
 
     def stand_with_upper_body(self, stand: np.ndarray) -> None:
         """Stand (and walk) with the upper body as in `stand` (carrying): the walk keeps the arms there."""
@@ -316,12 +324,13 @@ class JointArbiter:
             self._arm = self._make_arm()
         return self._arm
 
-    def take_arm(self) -> ArmMotion:
-        """Give the joints to the arm motion, starting from what is commanded now (the robot standing still)."""
+    def take_arm(self, hand: Hand | None = None) -> ArmMotion:
+        """Give the joints to the arm motion, starting from what is commanded now (the robot standing still),
+        reaching with `hand` (None: the hand it last reached with, which may hold something)."""
         arm = self.arm_motion()
         with self._lock:
             if not self._arm_active:
-                arm.start(self._targets.copy(), "right")
+                arm.start(self._targets.copy(), hand or self.hand)
                 self._arm_active = True
         return arm
 

@@ -4,6 +4,9 @@ All measured in simulation with humanoid_v1's right hand (scratch trials, seeds 
 its hand nearer than about 0.25 m in front of the feet at shoulder height, so the object goes 0.31 m ahead and
 0.11 m to the right of the feet centre; the hand comes from 6 cm behind and 3 cm above and closes with the object
 between the middles of the finger pads (the palm clears it).
+
+The left hand does the mirror image of all of it (`for_hand`; the robot is left-right symmetric): a grasp falls to it
+only where no stance for the right hand is free (world seed 4: a plant stands where the feet go for the apple).
 """
 
 from __future__ import annotations
@@ -11,6 +14,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -42,13 +46,35 @@ LIFT_M = 0.05
 EMPTY_GRIP_M = 0.004
 
 
+Hand = Literal["right", "left"]
+HANDS: tuple[Hand, ...] = ("right", "left")  # in the order they are tried: the right hand's moves were tuned
+
+
 @dataclass(frozen=True)
 class Stance:
-    """Where the feet stand (their centre, map frame) and which way they face: the reach is measured from them."""
+    """Where the feet stand (their centre, map frame), which way they face, and which hand grasps from there: the
+    reach is measured from them."""
 
     x: float
     y: float
     yaw: float
+    hand: Hand = "right"
+
+
+def for_hand(moves: list[Move], hand: Hand) -> list[Move]:
+    """The right hand's moves for `hand`: joint moves mirrored to the other arm; hand moves are targets in the feet
+    frame already (the object's own position), the same for either hand."""
+    if hand == "right":
+        return list(moves)
+    return [
+        JointMove(humanoid_v1.mirror_arm_joints(m.positions), m.duration_s, m.label) if isinstance(m, JointMove) else m
+        for m in moves
+    ]
+
+
+def _on_hand_side(offset: tuple[float, float], hand: Hand) -> tuple[float, float]:
+    """An offset tuned for the right hand (feet frame), for `hand`: mirrored across the feet's centre line."""
+    return offset if hand == "right" else (offset[0], -offset[1])
 
 
 def trunk_pose_at(stance: Stance, trunk_ahead: np.ndarray) -> tuple[float, float, float]:
@@ -76,21 +102,27 @@ OBJECT_FROM_EDGE_MAX_M = GRASP_OFFSET[0] - STANCE_FOOTPRINT_X[1]
 
 
 def grasp_stance(
-    object_xy: tuple[float, float], facing_yaw: float, blocked: Callable[[float, float], bool] | None = None
+    object_xy: tuple[float, float],
+    facing_yaw: float,
+    blocked: Callable[[float, float], bool] | None = None,
+    hand: Hand = "right",
 ) -> Stance:
-    """The pose to stand at, facing `facing_yaw`, to have the object at GRASP_OFFSET from the feet. Given the map
-    (`blocked`: is this point taken?), a stance with something close on its left (a wall at the counter's end) moves
-    right instead, with the object at CROWDED_LEFT_OFFSET; one where something stands (a chair by the counter) moves
-    to the nearest other place in the reach window that is free (the caller checks `stance_taken`: none may be)."""
-    stance = _stance_with_object_at(object_xy, facing_yaw, GRASP_OFFSET)
+    """The pose to stand at, facing `facing_yaw`, to have the object at GRASP_OFFSET from the feet (mirrored for the
+    left hand). Given the map (`blocked`: is this point taken?), a stance with something close on the free arm's
+    side (a wall at the counter's end) moves away from it, with the object at CROWDED_LEFT_OFFSET; one where
+    something stands (a chair by the counter) moves to the nearest other place in the reach window that is free
+    (the caller checks `stance_taken`: none may be)."""
+    stance = _stance_with_object_at(object_xy, facing_yaw, _on_hand_side(GRASP_OFFSET, hand), hand)
     if blocked is None:
         return stance
-    if room_on_left(stance.x, stance.y, stance.yaw, blocked) < STANCE_LEFT_ROOM_M:
-        stance = _stance_with_object_at(object_xy, facing_yaw, CROWDED_LEFT_OFFSET)
+    # the free arm's side: the left of a right-handed stance, the left of the opposite heading for a left-handed one
+    free_side_yaw = stance.yaw if hand == "right" else stance.yaw + math.pi
+    if room_on_left(stance.x, stance.y, free_side_yaw, blocked) < STANCE_LEFT_ROOM_M:
+        stance = _stance_with_object_at(object_xy, facing_yaw, _on_hand_side(CROWDED_LEFT_OFFSET, hand), hand)
     if not stance_taken(stance, blocked):
         return stance
     for offset in SHIFTED_OFFSETS:
-        shifted = _stance_with_object_at(object_xy, facing_yaw, offset)
+        shifted = _stance_with_object_at(object_xy, facing_yaw, _on_hand_side(offset, hand), hand)
         if not stance_taken(shifted, blocked):
             return shifted
     return stance
@@ -131,26 +163,32 @@ def grasp_stance_facing_any(
     object_xy: tuple[float, float], facings: list[float], blocked: Callable[[float, float], bool] | None
 ) -> Stance:
     """The first stance in `facings` (see `stance_facings`) where nothing on the map stands (`grasp_stance` for
-    each; the others also with room for the arm to swing out sideways); the first one's when all are taken (the
-    caller checks `stance_taken`). A turned stance whose only fault is the sideways swing is not taken although
-    the arm can come out in front there: on worlds never tuned on (seeds 110-399) the walk into such cramped
-    stances fell in 2 of 6 (world seed 4's apple picked fine)."""
+    each; the others also with room for the arm to swing out sideways), for the right hand, then for the left; the
+    first one's when all are taken (the caller checks `stance_taken`). A turned stance whose only fault is the
+    sideways swing is not taken although the arm can come out in front there: on worlds never tuned on (seeds
+    110-399) the walk into such cramped stances fell in 2 of 6. At world seed 4 the apple's stances for the right
+    hand are all taken (a plant where the feet go, a box in the turned ones' swing); the left hand's usual one is free.
+    """
     first = grasp_stance(object_xy, facings[0], blocked)
     if blocked is None or not stance_taken(first, blocked):
         return first
-    for yaw in facings[1:]:
-        stance = grasp_stance(object_xy, yaw, blocked)
-        if not stance_taken(stance, blocked) and not arm_sweep_taken(stance, blocked):
-            return stance
+    for hand in HANDS:
+        for k, yaw in enumerate(facings):
+            if hand == "right" and k == 0:
+                continue
+            stance = grasp_stance(object_xy, yaw, blocked, hand)
+            if not stance_taken(stance, blocked) and (k == 0 or not arm_sweep_taken(stance, blocked)):
+                return stance
     return first
 
 
 def arm_sweep_taken(stance: Stance, blocked: Callable[[float, float], bool]) -> bool:
-    """Something on the map where the right arm swings out sideways before reaching forward (`arm_out_moves`),
-    checked every 4 cm. A stance turned beside a box at world seed 4 swept the hand into it and the grasp closed
-    on nothing: a turned stance needs this clear. At the usual stance the arm comes out in front instead
-    (`arm_out_moves`; world seed 0's bottle has a chair there)."""
-    return _area_taken(stance, ARM_SWEEP_X, ARM_SWEEP_Y, blocked)
+    """Something on the map where the stance's grasping arm swings out sideways before reaching forward
+    (`arm_out_moves`), checked every 4 cm. A stance turned beside a box at world seed 4 swept the hand into it and
+    the grasp closed on nothing: a turned stance needs this clear. At the usual stance the arm comes out in front
+    instead (`arm_out_moves`; world seed 0's bottle has a chair there)."""
+    sweep_y = ARM_SWEEP_Y if stance.hand == "right" else (-ARM_SWEEP_Y[1], -ARM_SWEEP_Y[0])
+    return _area_taken(stance, ARM_SWEEP_X, sweep_y, blocked)
 
 
 # Other places of the object in the feet frame, inside the reach window with REACH_MARGIN_M to spare, nearest the
@@ -190,19 +228,27 @@ def _area_taken(
     return False
 
 
-def _stance_with_object_at(object_xy: tuple[float, float], yaw: float, offset: tuple[float, float]) -> Stance:
+def _stance_with_object_at(
+    object_xy: tuple[float, float], yaw: float, offset: tuple[float, float], hand: Hand = "right"
+) -> Stance:
     c, s = math.cos(yaw), math.sin(yaw)
     dx, dy = offset
-    return Stance(object_xy[0] - (c * dx - s * dy), object_xy[1] - (s * dx + c * dy), yaw)
+    return Stance(object_xy[0] - (c * dx - s * dy), object_xy[1] - (s * dx + c * dy), yaw, hand)
 
 
-def reach_problem(object_in_feet: np.ndarray) -> str | None:
-    """Why the object (feet frame) is out of the right hand's reach from here, or None if it is within reach."""
+def reach_window_y(hand: Hand) -> tuple[float, float]:
+    """The side-to-side extent of `hand`'s reach (feet frame, m; REACH_Y mirrored for the left hand)."""
+    return REACH_Y if hand == "right" else (-REACH_Y[1], -REACH_Y[0])
+
+
+def reach_problem(object_in_feet: np.ndarray, hand: Hand = "right") -> str | None:
+    """Why the object (feet frame) is out of `hand`'s reach from here, or None if it is within reach."""
     x, y, z = (float(v) for v in object_in_feet)
+    low_y, high_y = reach_window_y(hand)
     if not REACH_X[0] <= x <= REACH_X[1]:
         return f"{x:.2f} m ahead (reach {REACH_X[0]:.2f}-{REACH_X[1]:.2f} m)"
-    if not REACH_Y[0] <= y <= REACH_Y[1]:
-        return f"{y:+.2f} m to the side (reach {REACH_Y[0]:+.2f} to {REACH_Y[1]:+.2f} m)"
+    if not low_y <= y <= high_y:
+        return f"{y:+.2f} m to the side (reach {low_y:+.2f} to {high_y:+.2f} m)"
     if not REACH_SURFACE_Z[0] <= z <= REACH_SURFACE_Z[1]:
         return f"on a surface {z:.2f} m high (reach {REACH_SURFACE_Z[0]:.2f}-{REACH_SURFACE_Z[1]:.2f} m)"
     return None
@@ -213,12 +259,13 @@ def reach_problem(object_in_feet: np.ndarray) -> str | None:
 REACH_MARGIN_M = 0.015
 
 
-def comfortably_in_reach(object_in_feet: np.ndarray, margin: float = REACH_MARGIN_M) -> bool:
-    """Whether the object (feet frame) is in the right hand's reach with `margin` to spare on every side."""
+def comfortably_in_reach(object_in_feet: np.ndarray, margin: float = REACH_MARGIN_M, hand: Hand = "right") -> bool:
+    """Whether the object (feet frame) is in `hand`'s reach with `margin` to spare on every side."""
     x, y, z = (float(v) for v in object_in_feet)
+    low_y, high_y = reach_window_y(hand)
     return (
         REACH_X[0] + margin <= x <= REACH_X[1] - margin
-        and REACH_Y[0] + margin <= y <= REACH_Y[1] - margin
+        and low_y + margin <= y <= high_y - margin
         and REACH_SURFACE_Z[0] <= z <= REACH_SURFACE_Z[1]
     )
 
@@ -269,7 +316,7 @@ ARM_FORWARD_WAYPOINTS = (
 )
 
 
-def arm_out_moves(sideways_clear: bool = True) -> list[Move]:
+def arm_out_moves(sideways_clear: bool = True, hand: Hand = "right") -> list[Move]:
     """From the arms at rest to the right hand in front at shoulder height, clear of what stands on the surface:
     raise the arm sideways (opening the gripper out there), turn it flat, fold the elbow, swing it forward (a
     straight hand path would sweep through the counter). The left arm swings back for the crouch (LEFT_ARM_BACK).
@@ -278,17 +325,23 @@ def arm_out_moves(sideways_clear: bool = True) -> list[Move]:
     first = {**LEFT_ARM_BACK, "r_grip": humanoid_v1.FINGER_TRAVEL}
     if not sideways_clear:
         low, high = ARM_FORWARD_WAYPOINTS
-        return [
-            JointMove({**low, **first}, 0.8, "forward low"),
-            JointMove(high, 0.8, "raise in front"),
-            JointMove(RIGHT_ARM_IN_FRONT, 0.8, "over the surface"),
-        ]
-    return [
-        JointMove({**RIGHT_ARM_OUT, **first}, 0.8, "raise sideways"),
-        JointMove({"r_sho_pitch": RIGHT_ARM_IN_FRONT["r_sho_pitch"]}, 0.6, "turn flat"),
-        JointMove({n: RIGHT_ARM_IN_FRONT[n] for n in ("r_el", "r_wrist")}, 0.6, "fold"),
-        JointMove({"r_sho_roll": RIGHT_ARM_IN_FRONT["r_sho_roll"]}, 0.8, "swing forward"),
-    ]
+        return for_hand(
+            [
+                JointMove({**low, **first}, 0.8, "forward low"),
+                JointMove(high, 0.8, "raise in front"),
+                JointMove(RIGHT_ARM_IN_FRONT, 0.8, "over the surface"),
+            ],
+            hand,
+        )
+    return for_hand(
+        [
+            JointMove({**RIGHT_ARM_OUT, **first}, 0.8, "raise sideways"),
+            JointMove({"r_sho_pitch": RIGHT_ARM_IN_FRONT["r_sho_pitch"]}, 0.6, "turn flat"),
+            JointMove({n: RIGHT_ARM_IN_FRONT[n] for n in ("r_el", "r_wrist")}, 0.6, "fold"),
+            JointMove({"r_sho_roll": RIGHT_ARM_IN_FRONT["r_sho_roll"]}, 0.8, "swing forward"),
+        ],
+        hand,
+    )
 
 
 def grasp_moves(
@@ -332,12 +385,12 @@ def grasping(commanded_grip_m: float, measured_grip_m: float) -> bool:
     return measured_grip_m >= EMPTY_GRIP_M and commanded_grip_m < measured_grip_m - GRIP_SQUEEZE_M
 
 
-def carry_moves() -> list[Move]:
+def carry_moves(hand: Hand = "right") -> list[Move]:
     """From holding the object up where it was grasped to carrying it close to the body (less to sway when
-    walking, nothing sticking out to sweep into furniture when turning); the left arm goes back to rest."""
+    walking, nothing sticking out to sweep into furniture when turning); the other arm goes back to rest."""
     stand = humanoid_v1.stand_posture()
     left_arm_at_rest = {n: stand[n] for n in LEFT_ARM_BACK}
-    return [JointMove({**CARRY_ARM, **left_arm_at_rest}, 1.2, "carry")]
+    return for_hand([JointMove({**CARRY_ARM, **left_arm_at_rest}, 1.2, "carry")], hand)
 
 
 PLACE_ABOVE_M = 0.04  # the object is carried over its spot this high above where it will stand, then lowered
@@ -345,7 +398,7 @@ SET_DOWN_ABOVE_M = 0.004  # released this far above the surface: the fingers do 
 
 
 def place_moves(
-    spot_in_feet: np.ndarray, object_height: float, round_object: bool = False
+    spot_in_feet: np.ndarray, object_height: float, round_object: bool = False, hand: Hand = "right"
 ) -> tuple[list[Move], np.ndarray]:
     """Carry the held object over the spot (feet frame, on the surface), lower it, let go and back away; returns the
     moves and the hand's release point."""
@@ -355,12 +408,12 @@ def place_moves(
     height = trunk_height_for(float(release[2]))
     above = release + np.array([0.0, 0.0, PLACE_ABOVE_M])
     moves: list[Move] = [
-        JointMove(LEFT_ARM_BACK, 0.8, "left arm back"),  # clear of the floor in the crouch
+        JointMove(LEFT_ARM_BACK, 0.8, "other arm back"),  # clear of the floor in the crouch
         HandMove(tuple(above), 1.5, 0.0, height, label="over the spot"),
         HandMove(tuple(release), 1.2, 0.0, height, label="set down"),
         *release_moves(release),
     ]
-    return moves, release
+    return for_hand(moves, hand), release
 
 
 # Where the hand ends after letting go, from the release point (m): behind and above the object. Further (it was

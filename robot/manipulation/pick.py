@@ -16,6 +16,7 @@ from robot.manipulation.arm_motion import Move
 from robot.manipulation.grasp_plan import (
     EMPTY_GRIP_M,
     LIFT_M,
+    Hand,
     Stance,
     arm_out_moves,
     grasp_moves,
@@ -50,15 +51,16 @@ class PickBody(Protocol):
         """Where to stand to grasp the object there: square to its surface, further right beside a wall on the left
         (`grasp_plan.grasp_stance` on the robot's map)."""
 
-    def sideways_clear(self) -> bool:
-        """Whether nothing on the map stands where the right arm swings out sideways from where the robot stands
+    def sideways_clear(self, hand: Hand = "right") -> bool:
+        """Whether nothing on the map stands where `hand`'s arm swings out sideways from where the robot stands
         (`grasp_plan.arm_sweep_taken`); True with no map yet."""
 
-    def arm(self, moves: Sequence[Move]) -> None:
-        """Play arm moves (the arm takes over the joints first) and return when they are done."""
+    def arm(self, moves: Sequence[Move], hand: Hand | None = None) -> None:
+        """Play arm moves reaching with `hand` (None: the last one; the arm takes over the joints first) and return
+        when they are done."""
 
     def grip_opening(self) -> float:
-        """Measured opening of each finger (m)."""
+        """Measured opening of each finger of the reaching hand (m)."""
 
     def stand_holding(self) -> None:
         """Stand up with the arm as it is, and hand the legs back to walking."""
@@ -73,6 +75,7 @@ class PickReport:
     grip_m: float
     rise_m: float
     stance_corrections: int
+    hand: Hand = "right"
 
 
 def pick(name: str, height: float, body: PickBody, round_object: bool = False) -> PickReport:
@@ -82,21 +85,24 @@ def pick(name: str, height: float, body: PickBody, round_object: bool = False) -
     seen = body.locate(name)
     if seen is None:
         raise PickFailed(f"not found: the {name} is not where it was seen")
+    hand = body.stance_for(seen).hand  # the left hand only where the right one has no room to stand
     for attempt in range(STANCE_ATTEMPTS + 1):
         in_feet = body.to_feet(seen)
-        problem = reach_problem(in_feet)
+        problem = reach_problem(in_feet, hand)
         if problem is None:
             break
         if attempt == STANCE_ATTEMPTS:
             raise PickFailed(f"unreachable: the {name} is {problem} after {corrections} stance corrections")
-        body.go_to(body.stance_for(seen), seen)
+        stance = body.stance_for(seen)
+        hand = stance.hand
+        body.go_to(stance, seen)
         corrections += 1
         seen = body.locate(name)
         if seen is None:
             raise PickFailed(f"not found: lost sight of the {name} at the counter")
     moves, grasp = grasp_moves(in_feet, height, round_object)
     try:
-        body.arm([*arm_out_moves(body.sideways_clear()), *moves])
+        body.arm([*arm_out_moves(body.sideways_clear(hand), hand), *moves], hand)
         grip = body.grip_opening()
         if grip < EMPTY_GRIP_M:
             raise PickFailed(f"grasp failed: the gripper closed on nothing ({grip * 2000:.0f} mm open)")
@@ -114,4 +120,4 @@ def pick(name: str, height: float, body: PickBody, round_object: bool = False) -
         body.stow_arm()
         raise
     body.stand_holding()
-    return PickReport(name, grip, rise, corrections)
+    return PickReport(name, grip, rise, corrections, hand)

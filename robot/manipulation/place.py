@@ -1,4 +1,4 @@
-"""`place_object`: stand where the spot is in the right hand's reach, carry the held object over it, lower it, let go,
+"""`place_object`: stand where the spot is in the holding hand's reach, carry the held object over it, lower it, let go,
 and check it stands where it was put.
 
 Failures name their cause: "unreachable", "not found" (the object is not where it was let go), "fell".
@@ -17,11 +17,12 @@ from robot.manipulation.grasp_plan import (
     GRASP_OFFSET,
     REACH_MARGIN_M,
     REACH_X,
-    REACH_Y,
+    Hand,
     Stance,
     grasp_stance,
     place_moves,
     reach_problem,
+    reach_window_y,
 )
 from robot.manipulation.pick import STANCE_ATTEMPTS
 from robot.model.world import Box
@@ -51,7 +52,7 @@ class PlaceBody(Protocol):
         """Walk to the stance (raises PickFailed or PlaceFailed with the navigation's reason); a stop short of it
         with the map point `reach` comfortably in the arm's reach will do."""
 
-    def arm(self, moves: list[Move]) -> None: ...
+    def arm(self, moves: list[Move], hand: Hand | None = None) -> None: ...
 
     def stow_arm(self, finish_in_background: bool = False) -> None:
         """Arm back down, gripper closed, standing. `finish_in_background`: return once the hand is clear of the
@@ -67,23 +68,29 @@ class PlaceReport:
 
 
 def place(
-    name: str, height: float, spot: np.ndarray, facing_yaw: float, body: PlaceBody, round_object: bool = False
+    name: str,
+    height: float,
+    spot: np.ndarray,
+    facing_yaw: float,
+    body: PlaceBody,
+    round_object: bool = False,
+    hand: Hand = "right",
 ) -> PlaceReport:
-    """Put the held object `name` (`height` tall, a ball if `round_object`) down with its base centre at `spot`
-    (map, on a surface)."""
+    """Put the object `name` held in `hand` (`height` tall, a ball if `round_object`) down with its base centre at
+    `spot` (map, on a surface)."""
     spot = np.asarray(spot, dtype=float)
     corrections = 0
     for attempt in range(STANCE_ATTEMPTS + 1):
         in_feet = body.to_feet(spot)
-        problem = reach_problem(in_feet)
+        problem = reach_problem(in_feet, hand)
         if problem is None:
             break
         if attempt == STANCE_ATTEMPTS:
             raise PlaceFailed(f"unreachable: the spot is {problem} after {corrections} stance corrections")
-        body.go_to(grasp_stance((float(spot[0]), float(spot[1])), facing_yaw), spot)
+        body.go_to(grasp_stance((float(spot[0]), float(spot[1])), facing_yaw, hand=hand), spot)
         corrections += 1
-    moves, _ = place_moves(in_feet, height, round_object)
-    body.arm(moves)
+    moves, _ = place_moves(in_feet, height, round_object, hand)
+    body.arm(moves, hand)
     body.stow_arm(finish_in_background=True)  # a spoken confirmation that follows need not wait for the arm
     seen = body.locate(name, near=spot)
     if seen is None:
@@ -132,18 +139,19 @@ def choose_spot(
 
 
 def spots_in_reach(
-    surface: Box, pose: tuple[float, float, float], occupied: list[tuple[float, float]]
+    surface: Box, pose: tuple[float, float, float], occupied: list[tuple[float, float]], hand: Hand = "right"
 ) -> list[np.ndarray]:
-    """Free spots on `surface` in the right hand's comfortable reach of a robot standing at `pose` (x, y, heading;
-    its feet roughly there), nearest the middle of the reach window first: wherever the robot came to rest by the
-    surface, it can put the object down there without walking again. The caller checks the exact reach from the
-    feet."""
+    """Free spots on `surface` in `hand`'s comfortable reach of a robot standing at `pose` (x, y, heading; its feet
+    roughly there), nearest the middle of the reach window first: wherever the robot came to rest by the surface,
+    it can put the object down there without walking again. The caller checks the exact reach from the feet."""
     x, y, yaw = pose
     c, s = math.cos(yaw), math.sin(yaw)
+    low_y, high_y = reach_window_y(hand)
+    middle_y = GRASP_OFFSET[1] if hand == "right" else -GRASP_OFFSET[1]
     ahead = np.arange(REACH_X[0] + REACH_MARGIN_M, REACH_X[1] - REACH_MARGIN_M + 1e-9, SPOT_GRID_M)
-    left = np.arange(REACH_Y[0] + REACH_MARGIN_M, REACH_Y[1] - REACH_MARGIN_M + 1e-9, SPOT_GRID_M)
+    left = np.arange(low_y + REACH_MARGIN_M, high_y - REACH_MARGIN_M + 1e-9, SPOT_GRID_M)
     grid = np.array([(a, b) for a in ahead for b in left])
-    order = np.argsort(np.hypot(grid[:, 0] - GRASP_OFFSET[0], grid[:, 1] - GRASP_OFFSET[1]), kind="stable")
+    order = np.argsort(np.hypot(grid[:, 0] - GRASP_OFFSET[0], grid[:, 1] - middle_y), kind="stable")
     spots = []
     for a, b in grid[order]:
         px, py = x + c * a - s * b, y + s * a + c * b

@@ -28,7 +28,6 @@ SHOULDER_ABOVE_TRUNK_M = 0.111
 # The reaching arm is drawn weakly towards this posture (right arm; the left mirrors it), so that the solver keeps
 # the elbow below and outside the hand instead of folding the arm back through the trunk.
 REACH_POSTURE_RIGHT = {"r_sho_pitch": -1.8, "r_sho_roll": 0.5, "r_el": -1.5, "r_wrist": 0.5}
-_MIRRORED_ARM = {"sho_roll", "el", "wrist"}
 
 _WEIGHTS = {
     "com": 10000.0,
@@ -199,7 +198,7 @@ class ReachIK:
 def reach_posture(side: str) -> dict[str, float]:
     if side == "right":
         return dict(REACH_POSTURE_RIGHT)
-    return {"l_" + n[2:]: (-v if n[2:] in _MIRRORED_ARM else v) for n, v in REACH_POSTURE_RIGHT.items()}
+    return humanoid_v1.mirror_arm_joints(REACH_POSTURE_RIGHT)
 
 
 def trunk_height_for(hand_z: float) -> float:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from robot.manipulation.arm_motion import JointMove, Move
-from robot.manipulation.grasp_plan import release_moves
+from robot.manipulation.grasp_plan import Hand, for_hand, release_moves
 from robot.model import humanoid_v1
 
 STAND_UP_S = 1.5
@@ -35,14 +35,15 @@ def standing_up_with(moves: list[Move], stand: np.ndarray) -> list[Move]:
     return [both, *rest]
 
 
-def arm_back_moves() -> list[Move]:
+def arm_back_moves(hand: Hand = "right") -> list[Move]:
     """The arm-out moves in reverse, ending in the standing arm posture with the gripper closed."""
     stand = humanoid_v1.stand_posture()
-    return [
+    moves: list[Move] = [
         JointMove({**SWING_BACK, "r_grip": 0.0}, 1.2, "swing back"),
         JointMove({"r_el": 0.0, "r_wrist": 0.0, "r_sho_pitch": 0.0}, 0.8, "unfold upright"),
         JointMove({n: stand[n] for n in REST_ARM_JOINTS}, 0.8, "arms to rest"),
     ]
+    return for_hand(moves, hand)
 
 
 def letting_go_out_in_front(hand_in_feet: np.ndarray) -> list[Move]:

@@ -145,6 +145,23 @@ def stand_posture(knee_bend: float = STAND_KNEE_BEND) -> dict[str, float]:
     return posture
 
 
+# Arm joints whose angle is negated from one side to the other for a mirror-image posture (checked by forward
+# kinematics: the mirrored posture puts the other hand at the mirror-image point). The grippers open alike.
+_ARM_MIRROR_SIGN = {"sho_pitch": -1.0, "sho_roll": -1.0, "el": -1.0, "wrist": -1.0, "grip": 1.0}
+
+
+def mirror_arm_joints(positions: dict[str, float]) -> dict[str, float]:
+    """The same arm posture for the other side: left joints become right ones and the other way round (what the
+    right hand's tuned moves become for the left hand). Arm and gripper joints only: anything else is refused."""
+    mirrored = {}
+    for name, value in positions.items():
+        side, _, joint = name.partition("_")
+        if side not in ("l", "r") or joint not in _ARM_MIRROR_SIGN:
+            raise ValueError(f"not an arm joint: {name!r}")
+        mirrored[f"{'r' if side == 'l' else 'l'}_{joint}"] = _ARM_MIRROR_SIGN[joint] * value
+    return mirrored
+
+
 def crouch_posture() -> dict[str, float]:
     return stand_posture(CROUCH_KNEE_BEND)
 

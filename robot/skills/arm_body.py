@@ -6,12 +6,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 
 from robot.control.head import DEFAULT_TILT
 from robot.manipulation.arm_motion import Move
 from robot.manipulation.grasp_plan import (
+    Hand,
     Stance,
     arm_sweep_taken,
     carry_moves,
@@ -84,13 +86,13 @@ class ArmBody:
         trunk = self._parts.arm.motion().trunk_in_feet(self._parts.arm.joint_positions())
         return trunk[:3, :3] @ in_trunk + trunk[:3, 3]
 
-    def comfortably_reaches(self, point_in_map: np.ndarray) -> bool:
-        """Whether the right hand reaches the map point from where the robot stands, with a margin to spare."""
-        return comfortably_in_reach(self.to_feet(point_in_map))
+    def comfortably_reaches(self, point_in_map: np.ndarray, hand: Hand = "right") -> bool:
+        """Whether `hand` reaches the map point from where the robot stands, with a margin to spare."""
+        return comfortably_in_reach(self.to_feet(point_in_map), hand=hand)
 
-    def sideways_clear(self) -> bool:
+    def sideways_clear(self, hand: Hand = "right") -> bool:
         blocked = self._blocked()
-        return blocked is None or not arm_sweep_taken(self.feet_stance(), blocked)
+        return blocked is None or not arm_sweep_taken(replace(self.feet_stance(), hand=hand), blocked)
 
     def feet_stance(self) -> Stance:
         """Where the feet stand now (their centre and heading, map frame), by the localiser."""
@@ -104,7 +106,7 @@ class ArmBody:
         blocked = self._blocked()
         if blocked is not None and stance_taken(stance, blocked):
             raise PickFailed(no_room_to_stand("object", stance))
-        good_stop = None if reach is None else (lambda: self.comfortably_reaches(reach))
+        good_stop = None if reach is None else (lambda: self.comfortably_reaches(reach, stance.hand))
         self._parts.head.point(0.0, DEFAULT_TILT)
         goal = self.trunk_goal(stance)
         x, y, yaw = goal
@@ -137,13 +139,14 @@ class ArmBody:
             (x, y), stance_facings(place.approach[2], place.surface, (x, y)), self._blocked()
         )
 
-    def arm(self, moves: list[Move]) -> None:
+    def arm(self, moves: list[Move], hand: Hand | None = None) -> None:
+        """Play `moves`, reaching with `hand` (None: the hand that reached last, which may hold something)."""
         arm_part = self._parts.arm
         if not arm_part.active:
             # a walk that has just ended may still be moving to the standing posture: reaching from the posture half
             # way (knees deep as when carrying) made the first hand move snap the legs straight and tip the robot
             self._wait_standing()
-        arm = arm_part.take()
+        arm = arm_part.take(hand)
         arm.queue(*moves)
         try:
             while not arm.done.is_set():
@@ -155,17 +158,19 @@ class ArmBody:
             raise
 
     def grip_opening(self) -> float:
-        return float(self._parts.arm.joint_positions()[humanoid_v1.JOINT_NAMES.index("r_grip")])
+        """The reaching hand's measured finger opening (m each)."""
+        grip = f"{self._parts.arm.hand[0]}_grip"
+        return float(self._parts.arm.joint_positions()[humanoid_v1.JOINT_NAMES.index(grip)])
 
     def stand_holding(self) -> None:
         arm = self._parts.arm
-        self.arm(standing_up_with(carry_moves(), arm.default_stand))
+        self.arm(standing_up_with(carry_moves(arm.hand), arm.default_stand))
         arm.release(arm.motion().targets)
         self._wait_standing()
 
     def stow_arm(self, finish_in_background: bool = False) -> None:
         arm = self._parts.arm
-        first, *rest = standing_up_with(arm_back_moves(), arm.default_stand)
+        first, *rest = standing_up_with(arm_back_moves(arm.hand), arm.default_stand)
         if finish_in_background:
             # the hand is out of the camera's view once swung back: the rest (1.6 s) goes on while the next steps run
             self.arm([first])

@@ -11,6 +11,7 @@ import numpy as np
 from robot.control.locomotion import Velocity, VelocityLimits
 from robot.interface import DetectedObject, KnownObject, SensorFeed
 from robot.manipulation.arm_motion import ArmMotion, Move
+from robot.manipulation.grasp_plan import Hand
 
 
 class Clock(Protocol):
@@ -95,8 +96,13 @@ class Arm(Protocol):
 
     def motion(self) -> ArmMotion: ...
 
-    def take(self) -> ArmMotion:
-        """Give the arm the joints (from what is commanded now) and return its motion."""
+    @property
+    def hand(self) -> Hand:
+        """The hand that last reached (the one that may hold something)."""
+
+    def take(self, hand: Hand | None = None) -> ArmMotion:
+        """Give the arm the joints (from what is commanded now), reaching with `hand` (None: the last one), and
+        return its motion."""
 
     def release(self, upper_body: np.ndarray | None) -> None:
         """Hand the joints back to standing and walking, the upper body as in `upper_body` (None: default)."""

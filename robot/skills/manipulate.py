@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from robot.manipulation.grasp_plan import (
+    Hand,
     grasp_stance,
     grasp_stance_facing_any,
     no_room_to_stand,
@@ -57,8 +58,8 @@ class ManipulateSkill:
         )
 
     def pick_object(self, args: dict[str, str], ctx: ExecutionContext) -> str:
-        """Stand where the object is in the right hand's reach, grasp it with contacts only, lift it and check it
-        rose with the hand; then stand up holding it, ready to walk."""
+        """Stand where the object is in a hand's reach (the right one's where there is room), grasp it with
+        contacts only, lift it and check it rose with the hand; then stand up holding it, ready to walk."""
         if self._parts.perception is None:
             raise StepFailed("picking needs the camera, and perception is off in this worker")
         name = self._world().resolve_object(args["object"]) or args["object"]
@@ -109,7 +110,15 @@ class ManipulateSkill:
         if spot is None:
             raise StepFailed(f"unreachable: no free spot on the {place.name} in front of the robot")
         try:
-            report = place_held(held, obj.height, spot, place.approach[2], self.arm_body(ctx), round_object=obj.round)
+            report = place_held(
+                held,
+                obj.height,
+                spot,
+                place.approach[2],
+                self.arm_body(ctx),
+                round_object=obj.round,
+                hand=self._parts.arm.hand,
+            )
         except BaseException as exc:  # failed, cancelled or stopped midway: the hand may have let go of it already
             if not self._parts.arm.grasping():
                 self._parts.arm.hold_object(None)
@@ -144,8 +153,9 @@ class ManipulateSkill:
             return None
         position, rotation = self._parts.localiser.map_trunk()
         pose = (float(position[0]), float(position[1]), yaw_of(rotation))
-        spots = spots_in_reach(place.surface, pose, self._occupied_except(held))
-        return next((spot for spot in spots if arm.comfortably_reaches(spot)), None)
+        hand = self._parts.arm.hand
+        spots = spots_in_reach(place.surface, pose, self._occupied_except(held), hand)
+        return next((spot for spot in spots if arm.comfortably_reaches(spot, hand)), None)
 
     def _occupied_except(self, held: str) -> list[tuple[float, float]]:
         """Where the objects the robot remembers stand (map, m), but the one it holds."""
@@ -171,7 +181,9 @@ class ManipulateSkill:
                 held = self._parts.arm.held or ""
                 spot = self.place_spot(place, held)
                 if spot is not None and self._world().resolve_place(step.args["location"]) == place.name:
-                    stance = grasp_stance((float(spot[0]), float(spot[1])), place.approach[2])
+                    stance = grasp_stance(
+                        (float(spot[0]), float(spot[1])), place.approach[2], hand=self._parts.arm.hand
+                    )
                     return arm.trunk_goal(stance), functools.partial(self._has_spot_here, place, held, arm)
                 continue
             if step.action != "pick_object" or place.surface is None:
@@ -184,17 +196,17 @@ class ManipulateSkill:
                 stance = grasp_stance_facing_any(xy, stance_facings(place.approach[2], place.surface, xy), blocked)
                 if blocked is not None and stance_taken(stance, blocked):
                     raise StepFailed(no_room_to_stand(name, stance))
-                return arm.trunk_goal(stance), functools.partial(self._remembered_in_reach, name, arm)
+                return arm.trunk_goal(stance), functools.partial(self._remembered_in_reach, name, arm, stance.hand)
         return place.approach, None
 
     def _has_spot_here(self, place: Place, held: str, arm: ArmBody) -> bool:
         return self.place_spot_here(place, held, arm) is not None
 
-    def _remembered_in_reach(self, name: str, arm: ArmBody) -> bool:
+    def _remembered_in_reach(self, name: str, arm: ArmBody, hand: Hand) -> bool:
         perception = self._parts.perception
         assert perception is not None
         known = perception.memory.get(name)
-        return known is not None and arm.comfortably_reaches(np.asarray(known.position, dtype=float))
+        return known is not None and arm.comfortably_reaches(np.asarray(known.position, dtype=float), hand)
 
     def map_blocked(self) -> Callable[[float, float], bool] | None:
         """Whether a map point is taken on the lidar map (obstacles not grown) or by the apartment's walls; None

@@ -145,3 +145,38 @@ def test_without_a_writable_cache_the_placo_model_goes_to_the_temporary_director
     path = write_placo_model()
     assert path.parent == tmp_path / "tmp" / f"humanoid-placo-{os.getuid()}"
     assert path.read_text() == humanoid_v1.placo_mjcf()
+
+
+def test_a_mirrored_arm_posture_puts_the_other_hand_at_the_mirror_image_point(robot_model) -> None:
+    """`mirror_arm_joints`, which turns the right hand's tuned moves into the left hand's: for postures across the
+    arm's range, the mirrored one puts the other hand (and its fingers) at the point mirrored across the body's
+    middle, and mirroring twice gives the posture back."""
+    data = mujoco.MjData(robot_model)
+    rng = np.random.default_rng(7)
+    limits = humanoid_v1.joint_limits()
+    arm = ("sho_pitch", "sho_roll", "el", "wrist", "grip")
+
+    def hands(posture: dict[str, float]) -> dict[str, np.ndarray]:
+        data.qpos[:] = 0.0
+        data.qpos[2], data.qpos[3] = 1.0, 1.0  # upright, in the air, facing +x: the body's middle is y = 0
+        for name, value in posture.items():
+            data.qpos[robot_model.joint(name).qposadr[0]] = value
+        mujoco.mj_kinematics(robot_model, data)
+        sites = ("right_hand", "left_hand")
+        pads = ("r_finger_a_pad", "r_finger_b_pad", "l_finger_a_pad", "l_finger_b_pad")
+        return {s: data.site(s).xpos.copy() for s in sites} | {g: data.geom(g).xpos.copy() for g in pads}
+
+    for _ in range(20):
+        right = {f"r_{j}": float(rng.uniform(limits[f"r_{j}"].lower, limits[f"r_{j}"].upper)) for j in arm}
+        left = humanoid_v1.mirror_arm_joints(right)
+        assert set(left) == {f"l_{j}" for j in arm}
+        assert humanoid_v1.mirror_arm_joints(left) == pytest.approx(right)
+        assert all(limits[n].lower <= v <= limits[n].upper for n, v in left.items())
+        as_right, as_left = hands(right), hands(left)
+        flip = np.array([1.0, -1.0, 1.0])
+        assert as_left["left_hand"] == pytest.approx(as_right["right_hand"] * flip, abs=1e-6)
+        fingers_right = sorted(tuple(as_right[g] * flip) for g in ("r_finger_a_pad", "r_finger_b_pad"))
+        fingers_left = sorted(tuple(as_left[g]) for g in ("l_finger_a_pad", "l_finger_b_pad"))
+        assert np.array(fingers_left) == pytest.approx(np.array(fingers_right), abs=1e-6)
+    with pytest.raises(ValueError, match="not an arm joint"):
+        humanoid_v1.mirror_arm_joints({"l_knee": 0.3})

@@ -54,6 +54,7 @@ class FakeBody:
         self.seen_after = seen_after
         self.stances: list[Stance] = []
         self.moves: list[Move] = []
+        self.hands: list[str | None] = []
         self.stowed = False
 
     def locate(self, name: str, near: np.ndarray | None = None) -> np.ndarray | None:
@@ -66,8 +67,9 @@ class FakeBody:
         self.stances.append(stance)
         self.feet = np.array([stance.x, stance.y, 0.0])
 
-    def arm(self, moves: list[Move]) -> None:
+    def arm(self, moves: list[Move], hand: str | None = None) -> None:
         self.moves.extend(moves)
+        self.hands.append(hand)
 
     def stow_arm(self, finish_in_background: bool = False) -> None:
         self.stowed = True
@@ -100,6 +102,27 @@ def test_an_out_of_reach_spot_is_walked_up_to_first() -> None:
     assert (body.stances[0].x, body.stances[0].y) == pytest.approx(IN_REACH)
 
 
+def test_an_object_held_in_the_left_hand_is_put_down_from_the_mirror_image_stance_with_the_left_arm() -> None:
+    body = FakeBody((IN_REACH[0] - 0.2, IN_REACH[1] + 0.1), seen_after=SPOT)
+    place("red mug", 0.05, SPOT, 0.0, body, hand="left")
+    (stance,) = body.stances
+    assert stance.hand == "left"
+    assert (stance.x, stance.y) == pytest.approx((SPOT[0] - GRASP_OFFSET[0], SPOT[1] + GRASP_OFFSET[1]))
+    assert body.hands == ["left"]
+    other_arm_back = body.moves[0]
+    assert isinstance(other_arm_back, JointMove)
+    assert all(name.startswith("r_") for name in other_arm_back.positions)  # the right arm clears the floor
+    with pytest.raises(PlaceFailed, match="unreachable"):  # from a right-handed stance it never reaches
+        place("red mug", 0.05, SPOT, 0.0, StuckBody(IN_REACH, seen_after=SPOT), hand="left")
+
+
+class StuckBody(FakeBody):
+    """A robot that cannot walk: it stays where it stands."""
+
+    def go_to(self, stance: Stance, reach: np.ndarray | None = None) -> None:
+        self.stances.append(stance)
+
+
 def test_an_object_not_seen_where_it_was_let_go_is_a_failure_that_says_so() -> None:
     with pytest.raises(PlaceFailed, match="not found"):
         place("red mug", 0.05, SPOT, 0.0, FakeBody(IN_REACH, seen_after=None))
@@ -130,3 +153,6 @@ def test_spots_in_reach_of_where_the_robot_stopped_lie_on_the_surface_nearest_th
     assert all(math.dist(s[:2], (-1.09, 0.6)) >= SPACING_M for s in taken)
     assert spots_in_reach(TABLE, (-1.2, 0.29, -math.pi / 2), []) == []
     assert spots_in_reach(TABLE, (-1.2, 0.05, math.pi / 2), []) == []
+    # for the left hand, the mirror image: 11 cm to the left
+    left = spots_in_reach(TABLE, (-1.2, 0.29, math.pi / 2), [], hand="left")
+    assert left[0] == pytest.approx([-1.2 - 0.11, 0.29 + 0.31, 0.2], abs=0.006)
