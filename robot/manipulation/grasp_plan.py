@@ -160,21 +160,24 @@ def same_facing(a: float, b: float) -> bool:
 
 
 def grasp_stance_facing_any(
-    object_xy: tuple[float, float], facings: list[float], blocked: Callable[[float, float], bool] | None
+    object_xy: tuple[float, float],
+    facings: list[float],
+    blocked: Callable[[float, float], bool] | None,
+    hands: tuple[Hand, ...] = HANDS,
 ) -> Stance:
     """The first stance in `facings` (see `stance_facings`) where nothing on the map stands (`grasp_stance` for
-    each; the others also with room for the arm to swing out sideways), for the right hand, then for the left; the
-    first one's when all are taken (the caller checks `stance_taken`). A turned stance whose only fault is the
-    sideways swing is not taken although the arm can come out in front there: on worlds never tuned on (seeds
-    110-399) the walk into such cramped stances fell in 2 of 6. At world seed 4 the apple's stances for the right
-    hand are all taken (a plant where the feet go, a box in the turned ones' swing); the left hand's usual one is free.
-    """
-    first = grasp_stance(object_xy, facings[0], blocked)
+    each; the others also with room for the arm to swing out sideways), for each of `hands` in turn (the right
+    hand, then the left); the first one's when all are taken (the caller checks `stance_taken`). A turned stance
+    whose only fault is the sideways swing is not taken although the arm can come out in front there: on worlds
+    never tuned on (seeds 110-399) the walk into such cramped stances fell in 2 of 6. At world seed 4 the apple's
+    stances for the right hand are all taken (a plant where the feet go, a box in the turned ones' swing); the left
+    hand's usual one is free."""
+    first = grasp_stance(object_xy, facings[0], blocked, hands[0])
     if blocked is None or not stance_taken(first, blocked):
         return first
-    for hand in HANDS:
+    for hand in hands:
         for k, yaw in enumerate(facings):
-            if hand == "right" and k == 0:
+            if hand == hands[0] and k == 0:
                 continue
             stance = grasp_stance(object_xy, yaw, blocked, hand)
             if not stance_taken(stance, blocked) and (k == 0 or not arm_sweep_taken(stance, blocked)):
@@ -234,6 +237,10 @@ def _stance_with_object_at(
     c, s = math.cos(yaw), math.sin(yaw)
     dx, dy = offset
     return Stance(object_xy[0] - (c * dx - s * dy), object_xy[1] - (s * dx + c * dy), yaw, hand)
+
+
+def other_hand(hand: Hand) -> Hand:
+    return "left" if hand == "right" else "right"
 
 
 def reach_window_y(hand: Hand) -> tuple[float, float]:

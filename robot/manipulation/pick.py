@@ -21,6 +21,7 @@ from robot.manipulation.grasp_plan import (
     arm_out_moves,
     grasp_moves,
     lift_moves,
+    other_hand,
     reach_problem,
     release_moves,
 )
@@ -47,9 +48,9 @@ class PickBody(Protocol):
         """Walk to the stance (raises PickFailed with the navigation's reason); a stop short of it with the map point
         `reach` comfortably in the arm's reach will do."""
 
-    def stance_for(self, point_in_map: np.ndarray) -> Stance:
+    def stance_for(self, point_in_map: np.ndarray, hand: Hand = "right") -> Stance:
         """Where to stand to grasp the object there: square to its surface, further right beside a wall on the left
-        (`grasp_plan.grasp_stance` on the robot's map)."""
+        (`grasp_plan.grasp_stance` on the robot's map); for `hand` where it has room, else for the other one."""
 
     def sideways_clear(self, hand: Hand = "right") -> bool:
         """Whether nothing on the map stands where `hand`'s arm swings out sideways from where the robot stands
@@ -85,15 +86,20 @@ def pick(name: str, height: float, body: PickBody, round_object: bool = False) -
     seen = body.locate(name)
     if seen is None:
         raise PickFailed(f"not found: the {name} is not where it was seen")
-    hand = body.stance_for(seen).hand  # the left hand only where the right one has no room to stand
+    # The left hand only where the right one has no room to stand; but a hand the object is in reach of already
+    # grasps (the map grows as the robot walks: at world seed 39 a chair just behind the right hand's stance was
+    # out of it once the robot stood at the left hand's, and walking over there, the left arm swung back into it).
+    hand = body.stance_for(seen).hand
     for attempt in range(STANCE_ATTEMPTS + 1):
         in_feet = body.to_feet(seen)
-        problem = reach_problem(in_feet, hand)
-        if problem is None:
+        reaching = next((h for h in (hand, other_hand(hand)) if reach_problem(in_feet, h) is None), None)
+        if reaching is not None:
+            hand = reaching
             break
         if attempt == STANCE_ATTEMPTS:
+            problem = reach_problem(in_feet, hand)
             raise PickFailed(f"unreachable: the {name} is {problem} after {corrections} stance corrections")
-        stance = body.stance_for(seen)
+        stance = body.stance_for(seen, hand)
         hand = stance.hand
         body.go_to(stance, seen)
         corrections += 1

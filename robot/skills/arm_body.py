@@ -21,6 +21,7 @@ from robot.manipulation.grasp_plan import (
     grasp_stance,
     grasp_stance_facing_any,
     no_room_to_stand,
+    other_hand,
     stance_facings,
     stance_taken,
     trunk_pose_at,
@@ -129,15 +130,15 @@ class ArmBody:
         arm = self._parts.arm
         return trunk_pose_at(stance, arm.motion().trunk_ahead_of_com(arm.joint_positions()))
 
-    def stance_for(self, point_in_map: np.ndarray) -> Stance:
+    def stance_for(self, point_in_map: np.ndarray, hand: Hand = "right") -> Stance:
+        """Where to stand to grasp at the map point: for `hand` where it has room, else for the other one."""
         x, y = float(point_in_map[0]), float(point_in_map[1])
         place = next((p for p in self._layout.places if p.surface is not None and p.surface.contains(x, y)), None)
         if place is None:
             position, _ = self._parts.localiser.map_trunk()
-            return grasp_stance((x, y), math.atan2(y - position[1], x - position[0]), self._blocked())
-        return grasp_stance_facing_any(
-            (x, y), stance_facings(place.approach[2], place.surface, (x, y)), self._blocked()
-        )
+            return grasp_stance((x, y), math.atan2(y - position[1], x - position[0]), self._blocked(), hand)
+        facings = stance_facings(place.approach[2], place.surface, (x, y))
+        return grasp_stance_facing_any((x, y), facings, self._blocked(), (hand, other_hand(hand)))
 
     def arm(self, moves: list[Move], hand: Hand | None = None) -> None:
         """Play `moves`, reaching with `hand` (None: the hand that reached last, which may hold something)."""

@@ -95,6 +95,75 @@ def test_the_left_arm_plays_the_right_arms_moves_in_mirror_image(moves) -> None:
     assert for_hand(right, "right") == right
 
 
+class FakePickBody:
+    """A robot facing +x with its feet at `feet` that walks where it is told, whose map has room for the right hand
+    only at `right_room` (else the stances it gives are the left hand's), and whose gripper closes on the object."""
+
+    def __init__(self, feet: tuple[float, float], right_room: bool) -> None:
+        self.feet = np.array([feet[0], feet[1], 0.0])
+        self.right_room = right_room
+        self.walks: list[Stance] = []
+        self.arm_hands: list[str | None] = []
+        self.lifted = False
+
+    def locate(self, name: str) -> np.ndarray:
+        return OBJECT + (np.array([0.0, 0.0, 0.05]) if self.lifted else 0.0)
+
+    def to_feet(self, point_in_map: np.ndarray) -> np.ndarray:
+        return np.asarray(point_in_map, dtype=float) - self.feet
+
+    def stance_for(self, point_in_map: np.ndarray, hand: str = "right") -> Stance:
+        usable = hand if hand == "left" or self.right_room else "left"
+        return grasp_stance((float(point_in_map[0]), float(point_in_map[1])), 0.0, hand=usable)
+
+    def go_to(self, stance: Stance, reach: np.ndarray | None = None) -> None:
+        self.walks.append(stance)
+        self.feet = np.array([stance.x, stance.y, 0.0])
+
+    def sideways_clear(self, hand: str = "right") -> bool:
+        return True
+
+    def arm(self, moves, hand: str | None = None) -> None:
+        self.arm_hands.append(hand)
+        self.lifted = any(m.label == "lift" for m in moves) or self.lifted
+
+    def grip_opening(self) -> float:
+        return 0.015
+
+    def stand_holding(self) -> None: ...
+
+    def stow_arm(self) -> None: ...
+
+
+OBJECT = np.array([1.6, 0.5, 0.25])
+
+
+def test_a_pick_walks_to_the_left_hands_stance_only_where_the_right_hand_has_no_room() -> None:
+    from robot.manipulation.pick import pick
+
+    far = (1.0, 0.3)
+    roomy = FakePickBody(far, right_room=True)
+    assert pick("red mug", 0.05, roomy).hand == "right"
+    assert [w.hand for w in roomy.walks] == ["right"] and set(roomy.arm_hands) - {None} == {"right"}
+
+    cramped = FakePickBody(far, right_room=False)
+    report = pick("red mug", 0.05, cramped)
+    assert report.hand == "left" and [w.hand for w in cramped.walks] == ["left"]
+    assert set(cramped.arm_hands) - {None} == {"left"}  # None: the hand that reached last
+    assert cramped.to_feet(OBJECT)[:2] == pytest.approx((GRASP_OFFSET[0], -GRASP_OFFSET[1]))
+
+
+def test_a_hand_the_object_is_in_reach_of_already_grasps_without_walking() -> None:
+    """The map grows as the robot walks: at world seed 39 the right hand's stance was free once the robot stood at
+    the left hand's, and walking over there the left arm swung back into the chair behind it."""
+    from robot.manipulation.pick import pick
+
+    at_left_stance = (OBJECT[0] - GRASP_OFFSET[0], OBJECT[1] + GRASP_OFFSET[1])
+    body = FakePickBody(at_left_stance, right_room=True)
+    report = pick("red mug", 0.05, body)
+    assert report.hand == "left" and body.walks == [] and report.stance_corrections == 0
+
+
 @pytest.mark.slow
 def test_a_fetch_of_the_apple_where_a_plant_stands_by_the_counter_picks_it_with_the_left_hand() -> None:
     """In physics, world seed 4: a plant stands where the feet go for the apple and a box beside the counter's end.
