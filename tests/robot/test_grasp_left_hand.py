@@ -26,6 +26,7 @@ from robot.manipulation.grasp_plan import (
 )
 from robot.manipulation.stand_up import arm_back_moves
 from robot.model import humanoid_v1
+from robot.model.world import Box
 from tests.robot.test_grasp_around_chair import at_the_counter, object_in_feet
 
 
@@ -49,6 +50,17 @@ def test_with_room_for_the_right_hand_the_right_hand_grasps() -> None:
     stance = grasp_stance_facing_any(xy, stance_facings(counter.approach[2], counter.surface, xy), blocked)
     assert stance.hand == "right" and not stance_taken(stance, blocked)
     assert grasp_stance(xy, 0.0, hand="left") == Stance(xy[0] - 0.31, xy[1] - 0.11, 0.0, "left")
+
+
+def test_a_stance_with_something_where_the_other_hand_swings_behind_the_back_is_taken() -> None:
+    """World seed 39: a chair 0.205 m behind the usual stance, outside the feet's footprint, and in the way of the
+    other hand swung back for the crouch."""
+    stance = Stance(1.32, 0.75, 0.0)
+    chair_behind = Box("chair", x=1.035, y=0.826, half_x=0.08, half_y=0.093, height=0.32)
+    assert not chair_behind.contains(stance.x - 0.2, stance.y + 0.18)  # clear of the footprint's corner
+    assert stance_taken(stance, lambda x, y: chair_behind.contains(x, y))
+    further_back = Box("chair", x=0.935, y=0.826, half_x=0.08, half_y=0.093, height=0.32)  # 0.305 m behind
+    assert not stance_taken(stance, lambda x, y: further_back.contains(x, y))
 
 
 def test_the_reach_window_of_the_left_hand_is_the_right_ones_mirror_image() -> None:
