@@ -77,6 +77,16 @@ def _on_hand_side(offset: tuple[float, float], hand: Hand) -> tuple[float, float
     return offset if hand == "right" else (offset[0], -offset[1])
 
 
+def _sideways_for_hand(extent: tuple[float, float], hand: Hand) -> tuple[float, float]:
+    """A side-to-side extent tuned for the right hand (feet frame, low to high), for `hand`: mirrored."""
+    return extent if hand == "right" else (-extent[1], -extent[0])
+
+
+def grasp_offset(hand: Hand) -> tuple[float, float]:
+    """Where the object goes from the feet at `hand`'s usual stance (GRASP_OFFSET, mirrored for the left hand)."""
+    return _on_hand_side(GRASP_OFFSET, hand)
+
+
 def trunk_pose_at(stance: Stance, trunk_ahead: np.ndarray) -> tuple[float, float, float]:
     """The trunk's pose (what walking steers) with the feet at `stance`, the trunk `trunk_ahead` (x, y; feet frame)
     from the feet's centre: steering the trunk onto the stance itself left the mug 3.5 cm beyond the reach window
@@ -112,7 +122,7 @@ def grasp_stance(
     side (a wall at the counter's end) moves away from it, with the object at CROWDED_LEFT_OFFSET; one where
     something stands (a chair by the counter) moves to the nearest other place in the reach window that is free
     (the caller checks `stance_taken`: none may be)."""
-    stance = _stance_with_object_at(object_xy, facing_yaw, _on_hand_side(GRASP_OFFSET, hand), hand)
+    stance = _stance_with_object_at(object_xy, facing_yaw, grasp_offset(hand), hand)
     if blocked is None:
         return stance
     # the free arm's side: the left of a right-handed stance, the left of the opposite heading for a left-handed one
@@ -190,8 +200,7 @@ def arm_sweep_taken(stance: Stance, blocked: Callable[[float, float], bool]) -> 
     (`arm_out_moves`), checked every 4 cm. A stance turned beside a box at world seed 4 swept the hand into it and
     the grasp closed on nothing: a turned stance needs this clear. At the usual stance the arm comes out in front
     instead (`arm_out_moves`; world seed 0's bottle has a chair there)."""
-    sweep_y = ARM_SWEEP_Y if stance.hand == "right" else (-ARM_SWEEP_Y[1], -ARM_SWEEP_Y[0])
-    return _area_taken(stance, ARM_SWEEP_X, sweep_y, blocked)
+    return _area_taken(stance, ARM_SWEEP_X, _sideways_for_hand(ARM_SWEEP_Y, stance.hand), blocked)
 
 
 # Other places of the object in the feet frame, inside the reach window with REACH_MARGIN_M to spare, nearest the
@@ -256,7 +265,7 @@ def other_hand(hand: Hand) -> Hand:
 
 def reach_window_y(hand: Hand) -> tuple[float, float]:
     """The side-to-side extent of `hand`'s reach (feet frame, m; REACH_Y mirrored for the left hand)."""
-    return REACH_Y if hand == "right" else (-REACH_Y[1], -REACH_Y[0])
+    return _sideways_for_hand(REACH_Y, hand)
 
 
 def reach_problem(object_in_feet: np.ndarray, hand: Hand = "right") -> str | None:

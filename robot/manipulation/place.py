@@ -14,11 +14,11 @@ import numpy as np
 
 from robot.manipulation.arm_motion import Move
 from robot.manipulation.grasp_plan import (
-    GRASP_OFFSET,
     REACH_MARGIN_M,
     REACH_X,
     Hand,
     Stance,
+    grasp_offset,
     grasp_stance,
     place_moves,
     reach_problem,
@@ -147,11 +147,11 @@ def spots_in_reach(
     x, y, yaw = pose
     c, s = math.cos(yaw), math.sin(yaw)
     low_y, high_y = reach_window_y(hand)
-    middle_y = GRASP_OFFSET[1] if hand == "right" else -GRASP_OFFSET[1]
+    middle_x, middle_y = grasp_offset(hand)
     ahead = np.arange(REACH_X[0] + REACH_MARGIN_M, REACH_X[1] - REACH_MARGIN_M + 1e-9, SPOT_GRID_M)
     left = np.arange(low_y + REACH_MARGIN_M, high_y - REACH_MARGIN_M + 1e-9, SPOT_GRID_M)
     grid = np.array([(a, b) for a in ahead for b in left])
-    order = np.argsort(np.hypot(grid[:, 0] - GRASP_OFFSET[0], grid[:, 1] - middle_y), kind="stable")
+    order = np.argsort(np.hypot(grid[:, 0] - middle_x, grid[:, 1] - middle_y), kind="stable")
     spots = []
     for a, b in grid[order]:
         px, py = x + c * a - s * b, y + s * a + c * b
