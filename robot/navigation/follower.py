@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,6 +31,17 @@ RUN_ON_END_SPEED = 0.55
 # How far along the path the robot's progress may jump in one update (m): a path that doubles back on itself
 # must not be skipped.
 PROGRESS_WINDOW_M = 0.5
+# Given the map (`blocked_at`), the point steered at is the furthest within the lookahead that the straight way to it
+# keeps off the map's grown obstacles, checked every SIGHT_STEP_M beyond SIGHT_NEAR_M of the robot (where it stands
+# is where it is), down to MIN_LOOKAHEAD_M. Pure pursuit cuts a corner by up to a third of the lookahead, and a robot
+# off its path (it overshot the start of a new one) heads straight for a point round the corner: a patrol's
+# shoulder and ankle met a chair that way, and it fell (world seed 2).
+SIGHT_STEP_M = 0.05
+SIGHT_NEAR_M = 0.1
+MIN_LOOKAHEAD_M = 0.05
+# Where the lookahead had to be shortened, the robot turns in place beyond this heading error (else
+# TURN_IN_PLACE_RAD): walking while it turns sweeps it sideways, towards what shortened it.
+CLOSE_TURN_IN_PLACE_RAD = math.radians(15.0)
 
 
 @dataclass(frozen=True)
@@ -82,19 +94,44 @@ class PathFollower:
                 best_s, best_d = s, d
         return max(self.progress, best_s)
 
-    def update(self, x: float, y: float, yaw: float) -> FollowCommand:
-        """The velocity command for a robot at (x, y) heading `yaw` (world frame)."""
+    def update(
+        self, x: float, y: float, yaw: float, blocked_at: Callable[[float, float], bool] | None = None
+    ) -> FollowCommand:
+        """The velocity command for a robot at (x, y) heading `yaw` (world frame); `blocked_at`: where the map has
+        no room for the robot (see SIGHT_STEP_M), if known."""
         self.progress = self._nearest_progress(x, y)
         goal = self.point_at(self.length)
         remaining = (self.length - self.progress) + math.dist((x, y), self.point_at(self.progress))
         if self.length - self.progress < LOOKAHEAD_M and math.dist((x, y), goal) < ARRIVED_M:
             return FollowCommand(0.0, 0.0, 0.0, True, 0.0)
-        tx, ty = self.point_at(self.progress + LOOKAHEAD_M)
+        lookahead = self._lookahead(x, y, blocked_at)
+        tx, ty = self.point_at(self.progress + lookahead)
         if math.dist((x, y), (tx, ty)) < 1e-6:
             tx, ty = goal
         error = math.remainder(math.atan2(ty - y, tx - x) - yaw, math.tau)
         yaw_rate = max(-MAX_TURN_RAD_S, min(MAX_TURN_RAD_S, HEADING_GAIN * error))
-        if abs(error) > TURN_IN_PLACE_RAD:
+        if abs(error) > (TURN_IN_PLACE_RAD if lookahead >= LOOKAHEAD_M else CLOSE_TURN_IN_PLACE_RAD):
             return FollowCommand(0.0, 0.0, yaw_rate, False, remaining)
         speed = MAX_FORWARD_M_S * min(1.0, remaining / SLOW_DOWN_M + self.end_speed) * math.cos(error) ** 2
         return FollowCommand(speed, 0.0, yaw_rate, False, remaining)
+
+    def _lookahead(self, x: float, y: float, blocked_at: Callable[[float, float], bool] | None) -> float:
+        """How far along the path to steer at: LOOKAHEAD_M, shortened until the straight way there is clear."""
+        lookahead = LOOKAHEAD_M
+        while blocked_at is not None and lookahead > MIN_LOOKAHEAD_M + 1e-9:
+            if _clear_way((x, y), self.point_at(self.progress + lookahead), blocked_at):
+                break
+            lookahead -= SIGHT_STEP_M
+        return lookahead
+
+
+def _clear_way(
+    start: tuple[float, float], end: tuple[float, float], blocked_at: Callable[[float, float], bool]
+) -> bool:
+    """Whether the straight way from `start` to `end` is off the map's blocked cells beyond SIGHT_NEAR_M."""
+    length = math.dist(start, end)
+    for d in np.arange(SIGHT_NEAR_M, length + 1e-9, SIGHT_STEP_M):
+        f = d / length
+        if blocked_at(start[0] + f * (end[0] - start[0]), start[1] + f * (end[1] - start[1])):
+            return False
+    return True

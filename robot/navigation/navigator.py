@@ -46,6 +46,9 @@ ROOMY_MAX_DETOUR_M = 0.5
 # A path round something just found in the way keeps a wider berth from it where there is room: the object's
 # footprint on the map grows as the robot sees more of it, and the robot is close to it when it turns away.
 DETOUR_CLEARANCE_M = CLEARANCE_M + 0.06
+# The follower steers only where the straight way keeps this much beyond the footprint (see follower.SIGHT_STEP_M):
+# half the usual berth, which the path itself keeps, so it may cut a corner by a few cm but not into what it rounds.
+SIGHT_CLEARANCE_M = CLEARANCE_M / 2
 CONTROL_PERIOD_S = 0.1
 # In the open, a robot with its hands free walks a path at up to OPEN_M_S: where nothing is mapped within
 # OPEN_BAND_M of its usual berth, at itself or on the next OPEN_AHEAD_M of the path, and more than
@@ -511,13 +514,8 @@ class Navigator:
         """Follow a planned path to `goal` (arriving along `facing` if given), replanning when the map shows the path
         blocked, or when `retarget` (asked on the way) moves the goal (see RETARGET_M)."""
         body = self.body
-        x, y, _ = body.pose()
         end_speed = STOP_END_SPEED if stop_at_end else RUN_ON_END_SPEED
-        path = self._plan_or_wait((x, y), goal, facing)
-        if not self._room_to_turn(path):
-            self._step_clear()
-            x, y, _ = body.pose()
-            path = self._plan_or_wait((x, y), goal, facing)
+        path = self._start_path(goal, facing)
         report.path = tuple(path)
         self._on_update(NavigationState(self._goal, report.path, report.replans))
         follower = PathFollower(path, end_speed)
@@ -530,7 +528,8 @@ class Navigator:
         while True:
             self._check_fall()
             x, y, yaw = body.pose()
-            command = follower.update(x, y, yaw)
+            sight = body.costmap(ROBOT_RADIUS + SIGHT_CLEARANCE_M, off_mat_edges=False)
+            command = follower.update(x, y, yaw, None if sight is None else sight.blocked_at)
             if command.arrived:
                 report.walked_m += follower.progress
                 break
@@ -572,6 +571,12 @@ class Navigator:
                 if _path_blocked(costmap, follower):
                     report.walked_m += follower.progress
                     path = self._replan((x, y), goal, facing)
+                    if self._turns_first(path):
+                        # not a way to take in stride: the robot would walk on past the new path's start and turn
+                        # there, by what it now steers round; it stops, and starts afresh from where it stands
+                        self._stop()
+                        path = self._start_path(goal, facing, DETOUR_CLEARANCE_M)
+                        turn = _TurnWatch()
                     report.replans += 1
                     report.path = tuple(path)
                     self._on_update(NavigationState(self._goal, report.path, report.replans))
@@ -582,6 +587,21 @@ class Navigator:
             body.wait(CONTROL_PERIOD_S)
         if stop_at_end:
             self._stop()
+
+    def _start_path(
+        self, goal: tuple[float, float], facing: float | None, clearance_m: float | None = None
+    ) -> list[tuple[float, float]]:
+        """A path from where the robot stands, stepping clear first where it has no room to turn onto it."""
+        path = self._plan_or_wait(self.body.pose()[:2], goal, facing, clearance_m)
+        if not self._room_to_turn(path):
+            self._step_clear()
+            path = self._plan_or_wait(self.body.pose()[:2], goal, facing, clearance_m)
+        return path
+
+    def _turns_first(self, path: list[tuple[float, float]]) -> bool:
+        """Whether the follower would start `path` with a turn in place."""
+        first = PathFollower(path, STOP_END_SPEED).update(*self.body.pose())
+        return not first.arrived and first.vx <= 0.0
 
     def _speed_up(self, follower: PathFollower, command: FollowCommand, x: float, y: float) -> float:
         """The factor on the follower's speed: OPEN_M_S over its usual speed in the open, else 1."""
@@ -610,10 +630,9 @@ class Navigator:
         or where a step clear would do harm: on or beside a mat (a sidestep there lands a foot on its edge)."""
         if self.turn_room_m <= 0.0:
             return True
-        x, y, yaw = self.body.pose()
-        first = PathFollower(path, STOP_END_SPEED).update(x, y, yaw)
-        if first.arrived or first.vx > 0.0:
+        if not self._turns_first(path):
             return True
+        x, y, _ = self.body.pose()
         standing = self.body.costmap(0.0)
         if standing is not None and standing.blocked_at(x, y):
             return True  # by a mat's edge (or inside an obstacle's cell, as the map has it): turn where it stands
@@ -669,13 +688,17 @@ class Navigator:
             return self._plan_or_wait(start, goal, facing)
 
     def _plan_or_wait(
-        self, start: tuple[float, float], goal: tuple[float, float], facing: float | None
+        self,
+        start: tuple[float, float],
+        goal: tuple[float, float],
+        facing: float | None,
+        clearance_m: float | None = None,
     ) -> list[tuple[float, float]]:
         """A path now, or after waiting a little for the way to clear (a person passing), or raise."""
         deadline = self._now() + BLOCKED_WAIT_S
         while True:
             try:
-                return self._plan(goal, facing, start)
+                return self._plan(goal, facing, start, clearance_m)
             except NavigationFailed:
                 if self._now() >= deadline:
                     raise

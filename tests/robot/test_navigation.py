@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -51,11 +52,13 @@ def test_simplify_keeps_only_the_corners_of_a_free_path() -> None:
     assert simplify(path, lambda x, y: x > 0.05 and y < 0.95, 0.02) == [(0.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
 
 
-def _drive(follower: PathFollower, x: float, y: float, yaw: float) -> tuple[bool, list[tuple[float, float, float]]]:
+def _drive(
+    follower: PathFollower, x: float, y: float, yaw: float, blocked_at: Callable[[float, float], bool] | None = None
+) -> tuple[bool, list[tuple[float, float, float]]]:
     """A unicycle that does exactly what the follower says, 0.1 s a step: whether it arrived, and its track."""
     track, dt = [(x, y, yaw)], 0.1
     for _ in range(2000):
-        command = follower.update(x, y, yaw)
+        command = follower.update(x, y, yaw, blocked_at)
         if command.arrived:
             return True, track
         assert 0.0 <= command.vx <= MAX_FORWARD_M_S + 1e-9 and abs(command.yaw_rate) <= MAX_TURN_RAD_S + 1e-9
@@ -78,6 +81,28 @@ def test_follower_keeps_to_the_path_round_a_corner() -> None:
     worst = max(min(abs(y) if x <= 1.0 else math.inf, abs(x - 1.0) if y >= 0.0 else math.inf) for x, y, _ in track)
     assert arrived
     assert worst < 0.1  # never more than 10 cm off the path
+
+
+def test_a_robot_off_its_path_by_a_corner_steers_back_onto_the_path_not_round_the_corner() -> None:
+    """World seed 2's patrol: a new path round a chair started where the robot was, but it walked on 10 cm past that
+    point before turning; steering at the lookahead round the corner took its shoulder into the chair. Knowing the
+    map, the follower steers back onto the path first."""
+    chair = (0.1, 0.3, 0.18, 0.4)  # x0, x1, y0, y1: north-east of the path's corner at (-0.11, 0.04)
+    path = [(0.0, 0.0), (-0.11, 0.04), (-0.11, 0.8)]
+    robot = (0.1, 0.0, 0.0)  # overshot the start, still facing east
+    grown = _open_costmap(((chair[0] - 0.2, chair[1] + 0.2, chair[2] - 0.2, chair[3] + 0.2),))
+
+    def closest(track: list[tuple[float, float, float]]) -> float:
+        return min(
+            math.dist((x, y), (min(max(x, chair[0]), chair[1]), min(max(y, chair[2]), chair[3]))) for x, y, _ in track
+        )
+
+    arrived, blind = _drive(PathFollower(path), *robot)
+    start = closest([robot])  # 18 cm: the path it was on ran past the chair
+    assert arrived and closest(blind) < start - 0.03  # the robot's footprint (16 cm) reaches into the chair
+    arrived, seeing = _drive(PathFollower(path), *robot, grown.blocked_at)
+    assert arrived and math.dist(seeing[-1][:2], path[-1]) < 0.1
+    assert closest(seeing) > start - 0.01
 
 
 def _open_costmap(blocked_boxes: tuple[tuple[float, float, float, float], ...] = ()) -> Costmap:

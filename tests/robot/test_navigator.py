@@ -9,6 +9,7 @@ from collections.abc import Callable
 import numpy as np
 import pytest
 
+from robot.interface import NavigationState
 from robot.navigation.costmap import Costmap
 from robot.navigation.follower import MAX_FORWARD_M_S, TURN_IN_PLACE_RAD
 from robot.navigation.grid_planner import inflate
@@ -339,12 +340,12 @@ class BoxDroppedBody(MappedBody):
         super().__init__(costmap)
         self.box, self.drop_at_s = box, drop_at_s
 
-    def costmap(self, inflate_m: float) -> Costmap:  # type: ignore[override]
+    def costmap(self, inflate_m: float, off_mat_edges: bool = True) -> Costmap:  # type: ignore[override]
         if self.t >= self.drop_at_s:
             for dx in (-0.05, 0.0, 0.05):
                 for dy in (-0.05, 0.0, 0.05):
                     self.map.blocked[self.map.cell(self.box[0] + dx, self.box[1] + dy)] = True
-        return super().costmap(inflate_m)
+        return super().costmap(inflate_m, off_mat_edges)
 
 
 def test_a_box_dropped_in_the_way_is_answered_with_a_new_path_on_the_next_map() -> None:
@@ -381,3 +382,22 @@ def test_a_robot_carrying_something_keeps_to_the_usual_speed_in_the_open() -> No
     report = Navigator(body, lambda: body.t, open_speed_m_s=MAX_FORWARD_M_S).go((2.0, 0.0))
     assert report.final_error_m < 0.1
     assert max(vx for vx, _, _ in body.commands) == pytest.approx(MAX_FORWARD_M_S)
+
+
+def test_a_new_path_that_starts_with_a_turn_is_started_afresh_from_where_the_robot_stopped() -> None:
+    """A walking robot runs on ~10 cm past where a new path starts (world seed 2's patrol: a box dropped ahead, the
+    way round it began with a turn back, and the robot turned by a chair it had walked on towards): a new path it
+    cannot take in stride, it stops for, and plans again from where it stands."""
+    for box in ((0.6, 0.0), (0.7, 0.0)):
+        body = BoxDroppedBody(_map_with(), box=box, drop_at_s=1.0)
+        new_paths: list[tuple[tuple[tuple[float, float], ...], tuple[float, float]]] = []
+
+        def published(state: NavigationState, body: BoxDroppedBody = body, seen: list = new_paths) -> None:
+            if state.replans:
+                seen.append((state.path, (body.x, body.y)))
+
+        report = Navigator(body, lambda body=body: body.t, published).go((1.8, 0.0))
+        assert report.replans == 1 and report.final_error_m < 0.1
+        assert body.stops == 2  # for the new path, and at the end
+        path, stood = new_paths[0]
+        assert path[0] == pytest.approx(stood, abs=1e-6)  # planned from where it stood (or stepped clear to)
