@@ -13,6 +13,10 @@ import numpy as np
 
 REACHED_M = 0.25  # within this of a waypoint (its open-floor point), the robot was there
 AWAY_M = 0.6  # ... and once this far from it again, a later pass is a new visit
+# A contact is counted only where the two geoms are this close (m) in the pose read beside it: the contact list is
+# read while the control thread steps the simulation, and a read torn by a step can pair any two geoms (a bench
+# run "saw" the trunk on the floor of a robot standing upright, and an ankle on a mug on the counter).
+CONFIRM_M = 0.01
 FOOT_BODIES = ("l_ank_roll_link", "r_ank_roll_link")
 GROUND_GEOMS = ("floor", "charging_dock")
 
@@ -37,6 +41,7 @@ class Judge:
         feet = {model.body(name).id for name in FOOT_BODIES}
         self._feet = {g for g in self._robot if int(model.geom_bodyid[g]) in feet}
         self._ground = {mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, n) for n in GROUND_GEOMS}
+        self._pose = mujoco.MjData(model)  # the judge's own copy of the pose, to measure a contact's geoms in
 
     def watch(self, state: Any) -> None:
         self._contacts(state.held_object, state.sim_time_s)
@@ -75,8 +80,19 @@ class Judge:
                 continue
             what = model.geom(int(other)).name or body
             touched = f"{model.body(int(model.geom_bodyid[mine])).name} with {what}"
-            if not any(c["what"] == touched for c in self.collisions):
+            if not any(c["what"] == touched for c in self.collisions) and self._touching(mine, other):
                 self.collisions.append({"what": touched, "sim_s": round(sim_time_s, 2)})
+
+    def _touching(self, a: int, b: int) -> bool:
+        """Whether geoms `a` and `b` are within CONFIRM_M of each other in the simulation's pose now."""
+        import mujoco
+
+        model, data, pose = self.backend.model, self.backend.data, self._pose
+        pose.qpos[:] = data.qpos
+        pose.mocap_pos[:] = data.mocap_pos
+        pose.mocap_quat[:] = data.mocap_quat
+        mujoco.mj_kinematics(model, pose)
+        return mujoco.mj_geomDistance(model, pose, a, b, 2 * CONFIRM_M, None) <= CONFIRM_M
 
 
 def _contact_pairs(data: Any) -> np.ndarray:
