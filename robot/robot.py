@@ -311,7 +311,7 @@ class Robot(InProcessPort):
             self.config.max_auto_replans,
         )
         self.latch.on_latch(lambda: runner.cancel("cancelled by e-stop"))
-        self.latch.on_latch(behaviours.estopped)
+        self.latch.on_latch(lambda: behaviours.estopped(self.latch.cause))
 
     def _behaviours(self) -> BehaviourRunner:
         assert self.behaviours is not None

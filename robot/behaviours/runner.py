@@ -65,7 +65,7 @@ class Run:
     reason: str = ""
     command_id: int | None = None
     ended_sim_s: float | None = None
-    stop_reason: str | None = None  # set when the operator stopped it
+    stop_reason: str | None = None  # set when the operator or the e-stop stopped it
     pause_reason: str = ""
     inbox: list[str] = field(default_factory=list)  # commands said to a behaviour that listens, oldest first
 
@@ -275,12 +275,18 @@ class BehaviourRunner:
         reply = self._p.tasks.resume()
         return replace(reply, message=f"resuming the {run.name} behaviour") if reply.accepted else reply
 
-    def estopped(self) -> None:
-        """The e-stop latched: a paused behaviour ends (a running one ends as its step is cancelled)."""
+    def estopped(self, cause: str = "") -> None:
+        """The e-stop latched (`cause`: who latched it, and why): a paused behaviour ends, a running one ends as its
+        step is cancelled; either says the cause."""
         with self._lock:
             run = self._run
-            if run is not None and run.state in (BehaviourState.PAUSED, BehaviourState.QUEUED):
-                self._end(run, BehaviourState.STOPPED, "stopped by the e-stop")
+            if run is None or run.state.finished:
+                return
+            reason = f"stopped by the e-stop ({cause})" if cause else "stopped by the e-stop"
+            if run.state in (BehaviourState.PAUSED, BehaviourState.QUEUED):
+                self._end(run, BehaviourState.STOPPED, reason)
+            else:
+                run.stop_reason = run.stop_reason or reason
 
     # ---------------------------------------------------------------------------------------------------------
     # the `behaviour` step, on the task thread

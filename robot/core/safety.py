@@ -43,6 +43,7 @@ class SafetyLatch:
         self.words = words
         self._latched = False
         self._pending: tuple[EStop, float] | None = None  # latched, not yet applied by the control thread
+        self._cause = ""  # who latched it, and why: "diagnostics: servos/r_knee: ..."
         self._fallen = False
         self._on_latch: list[Callable[[], None]] = []
         self._on_release: list[Callable[[], None]] = []
@@ -62,6 +63,11 @@ class SafetyLatch:
     def fallen(self) -> bool:
         return self._fallen
 
+    @property
+    def cause(self) -> str:
+        """Who latched the stop last, and why if it was not a person ("diagnostics: ..."): said where it ends work."""
+        return self._cause
+
     def latch(self, command: EStop) -> CommandReply:
         received = time.time()
         with self._lock:
@@ -69,6 +75,7 @@ class SafetyLatch:
                 return CommandReply(True, self.words.already_latched)
             self._latched = True
             self._pending = (command, received)
+            self._cause = f"{command.source}: {command.reason}" if command.reason else command.source
             for hook in self._on_latch:
                 hook()
         return CommandReply(True, self.words.latched)

@@ -166,15 +166,30 @@ def test_pause_keeps_the_state_and_resume_goes_on_from_it(make_worker, registry)
 
 
 def test_the_estop_ends_a_behaviour_and_holds(make_worker, registry) -> None:
+    """The run's reason says who latched the stop, and why when it was not a person (a bench run that ended "stopped
+    by the e-stop" with nothing touched left its cause unknown)."""
     worker = make_worker(realtime=False)
     assert worker.submit(StartBehaviour("count", {"to": 50})).accepted
     assert worker.wait_for(behaviour_is(BehaviourState.RUNNING), 20.0)
-    worker.submit(EStop(source="test"))
+    worker.submit(EStop(source="diagnostics", reason="servos/r_knee: overload"))
     assert worker.wait_for(behaviour_is(BehaviourState.STOPPED), 20.0)
     state = worker.state()
-    assert state.estop_latched and "e-stop" in state.behaviour.reason
+    assert state.estop_latched
+    assert state.behaviour.reason == "stopped by the e-stop (diagnostics: servos/r_knee: overload)"
     assert worker.submit(ResumeBehaviour()).refusal == Refusal.NOTHING_TO_DO
     assert worker.submit(StartBehaviour("count")).refusal == Refusal.ESTOP_LATCHED
+    worker.submit(ReleaseEStop(source="test"))
+
+
+def test_the_estop_ends_a_paused_behaviour_saying_who_latched_it(make_worker, registry) -> None:
+    worker = make_worker(realtime=False)
+    assert worker.submit(StartBehaviour("count", {"to": 50})).accepted
+    assert worker.wait_for(behaviour_is(BehaviourState.RUNNING), 20.0)
+    assert worker.submit(PauseBehaviour()).accepted
+    assert worker.wait_for(behaviour_is(BehaviourState.PAUSED), 20.0)
+    worker.submit(EStop(source="browser"))
+    assert worker.wait_for(behaviour_is(BehaviourState.STOPPED), 20.0)
+    assert worker.state().behaviour.reason == "stopped by the e-stop (browser)"
     worker.submit(ReleaseEStop(source="test"))
 
 
