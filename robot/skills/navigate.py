@@ -45,6 +45,12 @@ MAT_ENTRY_M = 0.35
 # Paths keep the robot's centre this far from a mat's edge (on it or off it): the feet reach `FEET_REACH_M`, and a
 # path along the pad's edge to its entry turned in place 10 cm off the edge (a typed pose on the dock, world 2).
 MAT_EDGE_KEEP_OFF_M = FEET_REACH_M + 0.05
+# The straight ways onto and off a mat keep this much room beyond the footprint where one can, as paths do (less where
+# none can): a patrol leaving the dock walked off it 16 cm from a box by its side, the least the footprint allows, and
+# a shoulder touched the box (world seed 14). Checked beyond `MAT_WAY_FROM_M` of the pose on the mat: the dock sits in
+# a corner, and the room there is the same whichever way the robot leaves.
+MAT_WAY_CLEARANCES_M = (CLEARANCE_M, CLEARANCE_M / 2, 0.0)
+MAT_WAY_FROM_M = 0.15
 
 
 def mat_entry(place: Place) -> tuple[float, float]:
@@ -220,18 +226,14 @@ class NavigateSkill:
         if mat is None:
             return None
         body = self.legs_and_map(ctx)
-        costmap = body.costmap(ROBOT_RADIUS, off_mat_edges=False)
-        ways = [
-            (entry, heading)
-            for entry, heading in pose_entries(mat, pose.x, pose.y, pose.yaw)
-            if costmap is None or _clear_line(costmap, entry, (pose.x, pose.y))
-        ]
+        ways = roomiest_ways(_grown_map(body), (pose.x, pose.y), pose_entries(mat, pose.x, pose.y, pose.yaw))
         here = body.pose()[:2]
         return min(ways, key=lambda way: math.dist(way[0], here), default=None)
 
     def _off_mat(self, navigator: Navigator, goal: tuple[float, float], ctx: ExecutionContext) -> NavigationReport:
         """From a mat (standing on it, bound away from it), straight off it across an edge, turned to that edge on
-        the mat first: the edge it faces if its way off is clear on the map, else the one nearest that. Setting off
+        the mat first: the edge it faces if its way off has the most room on the map, else the one nearest that
+        among those (`_roomiest_ways`). Setting off
         along a planned path, the robot turned on the dock's pad towards its next place and walked off over the pad's
         edge aslant (tours fell leaving the dock on world seeds 0 and 3)."""
         report = NavigationReport()
@@ -240,12 +242,10 @@ class NavigateSkill:
         mat = next((box for box in self._layout.furniture if is_mat(box) and box.contains(x, y)), None)
         if mat is None or mat.contains(*goal, FEET_REACH_M):
             return report
-        costmap = body.costmap(ROBOT_RADIUS, off_mat_edges=False)
         edges = sorted((k * math.pi / 2 for k in range(-1, 3)), key=lambda h: abs(math.remainder(h - yaw, math.tau)))
-        for heading in edges:
-            way_off = entry_along(mat, x, y, heading)
-            if costmap is not None and not _clear_line(costmap, (x, y), way_off):
-                continue
+        for way_off, heading in roomiest_ways(
+            _grown_map(body), (x, y), [(entry_along(mat, x, y, h), h) for h in edges]
+        ):
             steps = [(*way_off, heading)]
             if not same_facing(heading, yaw):
                 steps.insert(0, (x, y, heading))  # turned where it stands, on the mat
@@ -349,12 +349,41 @@ class NavigateSkill:
         return carry_back_away_m(self._layout, self.legs_and_map(ctx).pose())
 
 
-def _clear_line(costmap: Costmap, start: tuple[float, float], end: tuple[float, float]) -> bool:
-    """Whether the straight walk from `start` to `end` keeps clear of everything on the costmap."""
-    steps = max(1, math.ceil(math.dist(start, end) / (costmap.resolution / 2)))
+def roomiest_ways(
+    grown_map: Callable[[float], Costmap | None],
+    on_mat: tuple[float, float],
+    ways: list[tuple[tuple[float, float], float]],
+) -> list[tuple[tuple[float, float], float]]:
+    """Of `ways` (each a point off a mat and a heading, walked straight between it and `on_mat`), in their order,
+    those with the most room on the map, by `MAT_WAY_CLEARANCES_M` (all if there is no map yet). `grown_map(m)`: the
+    map with everything grown by `m` beyond the footprint."""
+    for extra in MAT_WAY_CLEARANCES_M:
+        costmap = grown_map(extra)
+        if costmap is None:
+            return ways
+        beyond = MAT_WAY_FROM_M if extra > 0.0 else 0.0
+        clear = [way for way in ways if _clear_line(costmap, way[0], on_mat, beyond_end_m=beyond)]
+        if clear:
+            return clear
+    return []
+
+
+def _grown_map(body: LegsAndMap) -> Callable[[float], Costmap | None]:
+    """The body's map grown by the footprint and a margin (mat edges not blocked: the ways cross them)."""
+    return lambda extra_m: body.costmap(ROBOT_RADIUS + extra_m, off_mat_edges=False)
+
+
+def _clear_line(
+    costmap: Costmap, start: tuple[float, float], end: tuple[float, float], beyond_end_m: float = 0.0
+) -> bool:
+    """Whether the straight walk from `start` to `end` keeps clear of everything on the costmap (but within
+    `beyond_end_m` of `end`)."""
+    length = math.dist(start, end)
+    steps = max(1, math.ceil(length / (costmap.resolution / 2)))
     return not any(
         costmap.blocked_at(start[0] + (end[0] - start[0]) * k / steps, start[1] + (end[1] - start[1]) * k / steps)
         for k in range(steps + 1)
+        if length * (1.0 - k / steps) >= beyond_end_m
     )
 
 

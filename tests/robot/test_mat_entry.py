@@ -12,11 +12,20 @@ import numpy as np
 import pytest
 
 from robot.interface import ExecutePlan, PlanState, StepState
-from robot.model.world import DOCK_PAD, FEET_REACH_M, generate_world, near_mat_edges
+from robot.model.world import DOCK_PAD, FEET_REACH_M, ROBOT_RADIUS, Box, generate_world, near_mat_edges
 from robot.navigation.costmap import Costmap
+from robot.navigation.grid_planner import inflate
 from robot.navigation.navigator import plan_path
 from robot.sim.backend import MujocoSimBackend
-from robot.skills.navigate import MAT_EDGE_KEEP_OFF_M, MAT_ENTRY_M, mat_entry, mat_under, pose_entries
+from robot.skills.navigate import (
+    MAT_EDGE_KEEP_OFF_M,
+    MAT_ENTRY_M,
+    entry_along,
+    mat_entry,
+    mat_under,
+    pose_entries,
+    roomiest_ways,
+)
 from robot.worker import RobotWorker
 
 
@@ -91,6 +100,34 @@ def test_a_path_past_the_pad_keeps_the_feet_off_its_edge() -> None:
     along = [p for a, b in itertools.pairwise(path) for p in np.linspace(a, b, 20)]
     assert min(_beyond_edge(tuple(p)) for p in along) >= FEET_REACH_M
     assert not any(costmap.blocked_at(*p) for p in along)
+
+
+def _grown_room(*boxes: Box):
+    """A room with `boxes` in it, as the map grown by the footprint and a margin is (`roomiest_ways`' argument)."""
+    room = Costmap(np.zeros((400, 300), dtype=bool), -2.0, -1.5, 0.01)  # fine cells: room measured to the cm
+    xs, ys = room.centres()
+    occupied = np.zeros_like(room.blocked)
+    for box in boxes:
+        occupied |= (np.abs(xs - box.x) <= box.half_x) & (np.abs(ys - box.y) <= box.half_y)
+    return lambda extra_m: Costmap(inflate(occupied, (ROBOT_RADIUS + extra_m) / 0.01), -2.0, -1.5, 0.01)
+
+
+def test_the_way_off_the_pad_with_room_is_taken_over_one_that_passes_a_box_at_the_footprints_width() -> None:
+    """World 14: the way off east ran 16 cm from a box beside it, and a shoulder touched the box; north is open."""
+    on_pad = (DOCK_PAD.x, DOCK_PAD.y)
+    east, north = (entry_along(DOCK_PAD, *on_pad, 0.0), 0.0), (entry_along(DOCK_PAD, *on_pad, math.pi / 2), math.pi / 2)
+    beside_east = Box("box", east[0][0] - 0.05, east[0][1] + ROBOT_RADIUS + 0.08, 0.1, 0.07, 0.3)
+    assert roomiest_ways(_grown_room(beside_east), on_pad, [east, north]) == [north]
+    assert roomiest_ways(_grown_room(), on_pad, [east, north]) == [east, north]  # both open: the order kept
+
+
+def test_where_no_way_has_the_usual_room_the_ways_the_footprint_clears_are_kept() -> None:
+    on_pad = (DOCK_PAD.x, DOCK_PAD.y)
+    east, north = (entry_along(DOCK_PAD, *on_pad, 0.0), 0.0), (entry_along(DOCK_PAD, *on_pad, math.pi / 2), math.pi / 2)
+    beside_east = Box("box", east[0][0] - 0.05, east[0][1] + ROBOT_RADIUS + 0.09, 0.1, 0.07, 0.3)  # 2 cm to spare
+    across_north = Box("wall", north[0][0], north[0][1] + 0.1, 0.5, 0.05, 0.3)
+    assert roomiest_ways(_grown_room(beside_east, across_north), on_pad, [north, east]) == [east]
+    assert roomiest_ways(lambda _extra: None, on_pad, [north, east]) == [north, east]  # no map yet
 
 
 def _walk_near_the_pad(seed: int, *targets: str):
