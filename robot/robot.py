@@ -37,6 +37,7 @@ from robot.core.publisher import MissionParts, StatePublisher
 from robot.core.safety import SafetyLatch
 from robot.core.tick import ControlTick
 from robot.diagnostics.robot_sources import RobotDiagnostics
+from robot.diagnostics.servo_heat import ServoHeatGauge
 from robot.events import EventBus, Subscription
 from robot.in_process import InProcessPort
 from robot.interface import (
@@ -259,6 +260,7 @@ class Robot(InProcessPort):
             localiser=self.localiser,
             perception=self.perception,
             clock=SimClock(self.body.now),
+            servo_heat=ServoHeatGauge(lambda: self.health.readings, self.config.diagnostics.servo_temperature_warn_c),
         )
         self.skills = build_skills(parts, self.layout, self._world_context, publish)
         arbiter = self.arbiter

@@ -24,6 +24,14 @@ from robot.planning.world_context import WorldContext
 from robot.skills.body import BodyParts
 from robot.skills.catalogue import Skills
 
+# A behaviour's walk starts only with every servo below the diagnostics' warning (65 C): above it the robot stands
+# and rests until the hottest is COOL_MARGIN_K below that. Walking warms the knees ~0.3 K a second in simulation, and
+# a long patrol reached 75 C, where the diagnostics stop the robot (bench world seed 18); a patrol until stopped would
+# always end so.
+COOL_MARGIN_K = 8.0
+REST_CHECK_S = 2.0
+MAX_REST_S = 900.0
+
 
 class Reporter(Protocol):
     """Where a behaviour's reports go (the run: its status and the session's events)."""
@@ -137,12 +145,35 @@ class BehaviourRobot:
     def go_to(self, target: str, to_pick: str | None = None, to_place: str | None = None) -> str:
         """Walk to a named place, or a pose "x, y" / "x, y, heading deg" (m), round obstacles on the map; with
         `to_pick` (an object) or `to_place` (a place), stop where that work can be done from."""
+        self.rest_if_hot()
         upcoming: tuple[Step, ...] = ()
         if to_pick is not None:
             upcoming = (Step("pick_object", {"object": to_pick}),)
         elif to_place is not None:
             upcoming = (Step("place_object", {"location": to_place}),)
         return self._do("navigate_to", upcoming, target=target)
+
+    def rest_if_hot(self) -> None:
+        """Stand still while a servo is hot, saying so, until it has cooled (`COOL_MARGIN_K`): walking on, it would
+        heat to where the diagnostics stop the robot. `BehaviourFailed` if it stays hot for `MAX_REST_S`."""
+        heat = self._parts.servo_heat
+        if heat is None:
+            return
+        joint, temperature = heat.hottest()
+        if temperature < heat.hot_c:
+            return
+        cool_c = heat.hot_c - COOL_MARGIN_K
+        self.feedback(f"resting: the {joint} servo is at {temperature:.0f} C; walking on below {cool_c:.0f} C")
+        started = self.sim_time_s
+        while temperature >= cool_c:
+            if self.sim_time_s - started >= MAX_REST_S:
+                minutes = MAX_REST_S / 60
+                raise BehaviourFailed(
+                    f"the {joint} servo is still at {temperature:.0f} C after {minutes:.0f} min of rest"
+                )
+            self.wait(REST_CHECK_S)
+            joint, temperature = heat.hottest()
+        self.feedback(f"rested {self.sim_time_s - started:.0f} s: the hottest servo is at {temperature:.0f} C")
 
     def detect(self, obj: str) -> str:
         """Look for an object (head, then body) and remember where it is; `BehaviourFailed` if not found."""

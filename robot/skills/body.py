@@ -113,9 +113,21 @@ class Arm(Protocol):
         """The measured joint positions."""
 
 
+class ServoHeat(Protocol):
+    """The servos' temperatures as their diagnostics read them."""
+
+    @property
+    def hot_c(self) -> float:
+        """At or above this a servo is hot (the diagnostics warn; some degrees more and they stop the robot)."""
+
+    def hottest(self) -> tuple[str, float]:
+        """The joint of the hottest servo, and its temperature (C)."""
+
+
 @dataclass(frozen=True)
 class BodyParts:
-    """Everything a skill may use of the robot (`perception` None: the robot has no camera or map)."""
+    """Everything a skill may use of the robot (`perception` None: the robot has no camera or map;
+    `servo_heat` None: no servo reports its temperature)."""
 
     head: Head
     legs: Legs
@@ -123,3 +135,4 @@ class BodyParts:
     localiser: Localiser
     perception: PerceptionView | None
     clock: Clock
+    servo_heat: ServoHeat | None = None

@@ -4,6 +4,7 @@ a step that overruns its timeout ends the behaviour with the reason and leaves t
 
 from __future__ import annotations
 
+import re
 import time
 
 import numpy as np
@@ -11,11 +12,14 @@ import pytest
 
 import robot.robot as robot_module
 from robot.behaviours.api import Behaviour, Param
+from robot.behaviours.errors import BehaviourFailed
 from robot.behaviours.registry import Registry
 from robot.interface import (
     BehaviourState,
     CancelPlan,
     EStop,
+    Fault,
+    InjectFault,
     PauseBehaviour,
     Refusal,
     ReleaseEStop,
@@ -93,9 +97,24 @@ class Wave(Behaviour):
         return "waving"
 
 
+class Stroll(Behaviour):
+    """Walks to a pose (perception is off in these tests, so the walk itself fails, said in its feedback)."""
+
+    name = "stroll"
+    description = "walks to a pose"
+    states = ("walking",)
+
+    def step(self, state, robot):  # type: ignore[no-untyped-def]
+        try:
+            robot.go_to("0.0, 0.0")
+        except BehaviourFailed as exc:
+            robot.feedback(f"no walk: {exc}")
+        return None
+
+
 @pytest.fixture
 def registry(monkeypatch: pytest.MonkeyPatch) -> Registry:
-    found = Registry({b.name: b for b in (Count, Crash, Quit, Hang, Wave)}, {}, {})
+    found = Registry({b.name: b for b in (Count, Crash, Quit, Hang, Wave, Stroll)}, {}, {})
     monkeypatch.setattr(robot_module, "discover", lambda: found)
     return found
 
@@ -243,3 +262,19 @@ def test_stopping_mid_gesture_leaves_the_robot_standing_with_the_arm_stowed(make
     assert worker.wait_for(lambda s: arm_down(worker), 30.0)
     assert not worker.state().fallen
     assert np.isfinite(worker.state().tilt_deg) and worker.state().tilt_deg < 20.0
+
+
+def test_a_walk_waits_standing_for_a_hot_servo_to_cool_and_says_so(make_worker, registry) -> None:
+    """A long patrol heated a knee to where the diagnostics stop the robot (75 C): a behaviour's walk starts only
+    below the warning (65 C), after a rest down to 57 C."""
+    worker = make_worker(realtime=False)
+    assert worker.submit(InjectFault(Fault.SERVO_HEAT, "l_knee", 42.0)).accepted  # about 67 C
+    assert worker.submit(StartBehaviour("stroll")).accepted
+    assert worker.wait_for(lambda s: s.behaviour is not None and s.behaviour.state != BehaviourState.RUNNING, 300.0)
+    state = worker.state()
+    assert state.behaviour.state == BehaviourState.SUCCEEDED and not state.estop_latched
+    resting, rested, walked = state.behaviour.feedback
+    assert resting.startswith("resting: the l_knee servo is at 6") and resting.endswith("walking on below 57 C")
+    rest = re.fullmatch(r"rested (\d+) s: the hottest servo is at (\d+) C", rested)
+    assert rest is not None and int(rest[1]) > 10 and int(rest[2]) <= 57  # (56.9 shows as 57)
+    assert walked.startswith("no walk:")  # the walk was asked for only after the rest
