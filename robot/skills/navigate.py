@@ -91,6 +91,19 @@ def pose_entries(mat: Box, x: float, y: float, yaw: float | None) -> list[tuple[
     ]
 
 
+# A way onto a mat: the entry beyond its edge, and the stance on it (x, y, heading) walked onto straight from there.
+MatWay = tuple[tuple[float, float], tuple[float, float, float]]
+# The way onto a mat moved this far or more when the robot got to its entry (the map changed at the last moment): it
+# walks to the new entry on a planned path before it steps on.
+WAY_MOVED_M = 0.15
+
+
+def _entry_pose(way: MatWay) -> tuple[float, float, float]:
+    """Where the walk onto the mat starts: the entry, turned to the stance's heading."""
+    (x, y), stance = way
+    return x, y, stance[2]
+
+
 # Where to stop at a place (x, y, heading), and whether a stop short of it will do for the work there (asked at
 # each stop), for the step after the walk.
 WorkPose = Callable[[Place, ExecutionContext], tuple[tuple[float, float, float], Callable[[], bool] | None]]
@@ -205,14 +218,20 @@ class NavigateSkill:
     def _onto_mat(
         self,
         navigator: Navigator,
-        entry: tuple[float, float],
-        stance: tuple[float, float, float],
+        way: Callable[[], MatWay],
         in_reach: Callable[[], bool] | None,
         ctx: ExecutionContext,
     ) -> NavigationReport:
-        """To the mat's `entry`, stopped there and turned to the stance's heading, then straight onto `stance`:
-        walking on without the stop, the robot came onto the pad still turning, 30-40 degrees aslant."""
-        report = navigator.go(entry, (*entry, stance[2]), back_away_m=self.back_away_m(ctx))
+        """To the mat's entry, stopped there and turned to the stance's heading, then straight onto the stance:
+        walking on without the stop, the robot came onto the pad still turning, 30-40 degrees aslant. `way` (the
+        entry and the stance) is asked again on the walk there: which way has room shows on a map that grows as the
+        robot walks (from the start of a tour, before any map, the dock's own way looked open; a box stood on it)."""
+        report = navigator.go(lambda _pose: way()[0], lambda: _entry_pose(way()), back_away_m=self.back_away_m(ctx))
+        entry, stance = way()
+        if math.dist(self.legs_and_map(ctx).pose()[:2], entry) > WAY_MOVED_M:  # it changed at the last moment
+            again = navigator.go(entry, _entry_pose((entry, stance)))
+            report.walked_m += again.walked_m
+            report.sim_s += again.sim_s
         last = navigator.step_to(stance, good_stop=in_reach)
         report.walked_m += last.walked_m
         report.sim_s += last.sim_s
@@ -229,6 +248,24 @@ class NavigateSkill:
         ways = roomiest_ways(_grown_map(body), (pose.x, pose.y), pose_entries(mat, pose.x, pose.y, pose.yaw))
         here = body.pose()[:2]
         return min(ways, key=lambda way: math.dist(way[0], here), default=None)
+
+    def _way_onto_place(self, place: Place, stance: tuple[float, float, float], ctx: ExecutionContext) -> MatWay:
+        """The entry onto a place on a mat, and the stance there: along the place's own heading (`mat_entry`) where
+        that way has the most room on the map; else squarely across the edge with the most room, the stance turned
+        to it (a box on the dock's entry: a tour walked into it, and fell, on world seed 22)."""
+        assert place.surface is not None
+        x, y, yaw = stance
+        own = (mat_entry(place), yaw)
+        ways = roomiest_ways(
+            _grown_map(self.legs_and_map(ctx)), (x, y), [own, *pose_entries(place.surface, x, y, None)]
+        )
+        entry, heading = ways[0] if ways else own
+        return entry, (x, y, heading)
+
+    def _way_onto_pose(self, pose: PoseGoal, first: tuple[tuple[float, float], float], ctx: ExecutionContext) -> MatWay:
+        """The way onto a pose on a mat as the map now shows it (`first`, the way found first, if none is clear)."""
+        entry, heading = self._way_onto_mat(pose, ctx) or first
+        return entry, (pose.x, pose.y, heading)
 
     def _off_mat(self, navigator: Navigator, goal: tuple[float, float], ctx: ExecutionContext) -> NavigationReport:
         """From a mat (standing on it, bound away from it), straight off it across an edge, turned to that edge on
@@ -274,10 +311,11 @@ class NavigateSkill:
                 costmap = self.legs_and_map(ctx).costmap(ROBOT_RADIUS, off_mat_edges=False)
                 if costmap is not None and costmap.blocked_at(pose.x, pose.y):
                     raise StepFailed(f"unreachable: ({pose.text()}) is in or against an obstacle on the map")
-                way = self._way_onto_mat(pose, ctx)
-                if way is not None:  # squarely onto the mat, as for a place on it
-                    entry, heading = way
-                    report = self._onto_mat(navigator, entry, (pose.x, pose.y, heading), None, ctx)
+                first_way = self._way_onto_mat(pose, ctx)
+                if first_way is not None:  # squarely onto the mat, as for a place on it
+                    report = self._onto_mat(
+                        navigator, functools.partial(self._way_onto_pose, pose, first_way, ctx), None, ctx
+                    )
                 else:
                     final = None if pose.yaw is None else (pose.x, pose.y, pose.yaw)
                     report = navigator.go((pose.x, pose.y), final, back_away_m=self.back_away_m(ctx))
@@ -295,7 +333,9 @@ class NavigateSkill:
                     return good_stop is not None and good_stop()
 
                 if place.surface is not None and is_mat(place.surface):
-                    report = self._onto_mat(navigator, mat_entry(place), work_pose(), in_reach, ctx)
+                    report = self._onto_mat(
+                        navigator, lambda: self._way_onto_place(place, work_pose(), ctx), in_reach, ctx
+                    )
                 else:
                     staging = functools.partial(self._staging_for, place, ctx=ctx)
                     report = navigator.go(staging, work_pose, in_reach, self.back_away_m(ctx))

@@ -169,6 +169,21 @@ def test_the_robot_walks_onto_the_dock_squarely_and_stands_on_it() -> None:
     assert all(abs(math.degrees(yaw)) < 12.0 for *_, yaw in near_pad), near_pad
 
 
+def test_a_box_on_the_docks_own_entry_has_the_robot_walk_onto_the_pad_across_another_edge() -> None:
+    """World 22: a box stands where the walk onto the dock along its heading starts (a tour walked into it and fell);
+    the robot comes onto the pad squarely from the north, the way with room."""
+    layout = generate_world(22)
+    box = next(b for b in layout.obstacles if b.name == "box_2")
+    assert box.contains(*mat_entry(_dock(22)))  # the dock's own way on is taken by the box
+    state, near_pad = _walk_near_the_pad(22, "charging dock")
+    assert state.plan.state == PlanState.SUCCEEDED, state.plan.steps[0].detail
+    assert not state.fallen
+    assert math.dist(state.base_position[:2], _dock(22).approach[:2]) < 0.1  # the truth: on the pad
+    north_edge = DOCK_PAD.y + DOCK_PAD.half_y
+    assert near_pad and all(y > north_edge and abs(x - DOCK_PAD.x) < 0.08 for x, y, _ in near_pad), near_pad
+    assert all(abs(math.degrees(yaw) + 90.0) < 12.0 for *_, yaw in near_pad), near_pad  # facing the pad, south
+
+
 def test_a_pose_typed_on_the_dock_is_walked_onto_squarely_along_its_heading() -> None:
     """A pose on the pad facing north (+y), typed rather than the place: the robot comes onto the pad from the
     north (south of it is the wall), in line with the pose and turned to its heading, as for the place (a foot landing
