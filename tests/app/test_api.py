@@ -210,18 +210,18 @@ def test_teleop_posture_and_reset_endpoints(client) -> None:
     assert reply.status_code == 200 and reply.json()["accepted"]
     worker = client.runtime.worker
     # the published state must show teleop before "idle" below can mean it ended (not a state from before it began)
-    assert worker.wait_for(lambda s: s.mode.value == "teleop", 5.0)
+    assert worker.wait_for(lambda s: s.mode.value == "teleop", 30.0)
     busy = client.post("/api/commands", json={"text": "say hello"})
     assert busy.status_code == 409 and "teleop is active" in busy.json()["detail"]["message"]
     assert client.post("/api/posture", json={"posture": "crouch"}).status_code == 409
     assert client.post("/api/teleop/stop").json()["accepted"]
     # teleop ends at once; the walk takes its last steps (a posture change is refused until it stands)
-    assert worker.wait_for(lambda s: s.mode.value == "idle" and s.locomotion.phase == "standing", 10.0)
+    assert worker.wait_for(lambda s: s.mode.value == "idle" and s.locomotion.phase == "standing", 30.0)
     assert client.post("/api/posture", json={"posture": "sit"}).status_code == 422
     assert client.post("/api/posture", json={"posture": "crouch"}).status_code == 200
-    assert worker.wait_for(lambda s: s.locomotion.posture == "crouch", 5.0)
+    assert worker.wait_for(lambda s: s.locomotion.posture == "crouch", 30.0)
     assert client.post("/api/reset").status_code == 200
-    assert worker.wait_for(lambda s: s.locomotion.posture == "stand" and not s.fallen, 5.0)
+    assert worker.wait_for(lambda s: s.locomotion.posture == "stand" and not s.fallen, 30.0)
     state = client.get("/api/state").json()
     assert state["locomotion"]["phase"] == "standing" and state["mode"] == "idle"
 

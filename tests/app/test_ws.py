@@ -60,10 +60,10 @@ def test_socket_teleop_drives_and_closing_the_socket_stops_the_robot(client) -> 
             time.sleep(0.1)
         receive_until(ws, lambda m: m["type"] == "state" and m["state"]["mode"] == "teleop")
     # the browser went away while driving: stopped at once, not only by the deadman
-    last_teleop = lambda: next(e for e in reversed(worker.recent_events()) if e.kind.startswith("teleop/"))  # noqa: E731
-    stop = wait_until(lambda: last_teleop().kind == "teleop/stop" and last_teleop(), timeout=5)
+    # (looked for among the events, not as the latest: the walk's end follows it a couple of seconds later)
+    stop = wait_until(lambda: next((e for e in worker.recent_events() if e.kind == "teleop/stop"), None))
     assert stop.data["source"] == "browser-disconnect"
-    assert worker.wait_for(lambda s: s.mode.value == "idle", 5.0)
+    assert worker.wait_for(lambda s: s.mode.value == "idle", 30.0)
 
 
 def test_the_estop_has_a_second_socket_of_its_own(client) -> None:

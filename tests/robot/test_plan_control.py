@@ -28,7 +28,9 @@ def test_with_approval_required_a_plan_waits_then_runs_when_approved(make_worker
     worker = make_worker(realtime=False, approve_plans=True)
     reply = worker.submit(RunCommand("say hello"))
     assert reply.accepted and "awaits approval" in reply.message
-    time.sleep(0.5)
+    assert worker.wait_for(lambda s: s.plan is not None and s.plan.state == PlanState.AWAITING_APPROVAL, 30.0)
+    waiting_at = worker.state().sim_time_s
+    assert worker.wait_for(lambda s: s.sim_time_s >= waiting_at + 0.5, 30.0)  # and it waits
     state = worker.state()
     assert state.approval_required
     assert state.plan.state == PlanState.AWAITING_APPROVAL and state.plan.steps[0].state == StepState.PENDING
@@ -43,7 +45,7 @@ def test_a_plan_awaiting_approval_can_be_rejected_or_edited(make_worker) -> None
     worker = make_worker(realtime=False, approve_plans=True)
     first = worker.submit(RunCommand("say hello"))
     assert worker.submit(CancelPlan()).accepted
-    assert worker.wait_for(lambda s: s.plan is not None and s.plan.state == PlanState.CANCELLED, 5.0)
+    assert worker.wait_for(lambda s: s.plan is not None and s.plan.state == PlanState.CANCELLED, 30.0)
     assert worker.submit(ApprovePlan()).refusal == Refusal.NOTHING_TO_DO
 
     second = worker.submit(RunCommand("say hello"))
@@ -73,7 +75,7 @@ def test_approval_can_be_switched_off_and_on(make_worker) -> None:
     worker = make_worker(realtime=False)
     assert worker.submit(SetApproval(True)).accepted
     worker.submit(RunCommand("say hi"))
-    assert worker.wait_for(lambda s: s.plan is not None and s.plan.state == PlanState.AWAITING_APPROVAL, 5.0)
+    assert worker.wait_for(lambda s: s.plan is not None and s.plan.state == PlanState.AWAITING_APPROVAL, 30.0)
     assert worker.submit(SetApproval(False)).accepted
     reply = worker.submit(RunCommand("say hi"))
     assert "queued" in reply.message
@@ -88,10 +90,11 @@ def test_pause_interrupts_the_running_step_and_resume_runs_it_again_then_the_res
     assert worker.submit(ExecutePlan(plan)).accepted
     assert worker.wait_for(lambda s: s.plan is not None and s.plan.steps[1].state == StepState.RUNNING, 10.0)
     assert worker.submit(PausePlan()).accepted
-    assert worker.wait_for(lambda s: s.plan is not None and s.plan.state == PlanState.PAUSED, 5.0)
+    assert worker.wait_for(lambda s: s.plan is not None and s.plan.state == PlanState.PAUSED, 30.0)
     paused = worker.state().plan
     assert [s.state for s in paused.steps] == [StepState.SUCCEEDED, StepState.PAUSED, StepState.PENDING]
-    time.sleep(0.3)
+    paused_at = worker.state().sim_time_s
+    assert worker.wait_for(lambda s: s.sim_time_s >= paused_at + 0.5, 30.0)
     assert worker.state().plan.state == PlanState.PAUSED  # nothing goes on by itself
     assert worker.submit(PausePlan()).refusal == Refusal.NOTHING_TO_DO
     resumed = worker.submit(ResumePlan())
@@ -112,7 +115,7 @@ def test_a_new_command_discards_a_paused_plan(make_worker) -> None:
     first = worker.submit(ExecutePlan({"steps": [{"action": "wait", "seconds": 5}]}))
     assert worker.wait_for(lambda s: s.plan is not None and s.plan.steps[0].state == StepState.RUNNING, 10.0)
     worker.submit(PausePlan())
-    assert worker.wait_for(lambda s: s.plan is not None and s.plan.state == PlanState.PAUSED, 5.0)
+    assert worker.wait_for(lambda s: s.plan is not None and s.plan.state == PlanState.PAUSED, 30.0)
     second = worker.submit(RunCommand("say hi"))
     assert worker.wait_for(succeeded(second.command_id), 10.0)
     assert first.command_id != second.command_id
@@ -125,11 +128,13 @@ def test_an_estop_with_a_pause_leaves_nothing_to_resume(make_worker) -> None:
     assert worker.wait_for(lambda s: s.plan is not None and s.plan.steps[0].state == StepState.RUNNING, 10.0)
     worker.submit(PausePlan())
     worker.submit(EStop(source="test"))
-    assert worker.wait_for(lambda s: s.plan.state in (PlanState.CANCELLED, PlanState.PAUSED) and s.estop_latched, 5.0)
-    time.sleep(0.2)
-    assert worker.state().plan.state == PlanState.CANCELLED
+    assert worker.wait_for(lambda s: s.plan.state == PlanState.CANCELLED and s.estop_latched, 30.0)
     assert worker.submit(ResumePlan()).refusal == Refusal.ESTOP_LATCHED
-    worker.submit(ReleaseEStop(source="test"))
+    deadline = time.monotonic() + 30.0
+    # the release is refused while the stop is still being applied (longer on a loaded machine)
+    while not (released := worker.submit(ReleaseEStop(source="test"))).accepted and time.monotonic() < deadline:
+        time.sleep(0.02)
+    assert released.accepted, released.message
     assert worker.submit(ResumePlan()).refusal == Refusal.NOTHING_TO_DO
 
 
@@ -137,7 +142,7 @@ def test_a_misheard_command_asks_before_running_the_next_wording_the_recogniser_
     worker = make_worker(realtime=False)  # plans run unasked: the one of another wording still asks
     reply = worker.submit(RunCommand("please grant me the water bottle", ("please bring me the water bottle",)))
     assert reply.accepted and reply.message.startswith('did you mean "please bring me the water bottle"?'), reply
-    assert worker.wait_for(lambda s: s.plan is not None and s.plan.state == PlanState.AWAITING_APPROVAL, 5.0)
+    assert worker.wait_for(lambda s: s.plan is not None and s.plan.state == PlanState.AWAITING_APPROVAL, 30.0)
     plan = worker.state().plan
     assert plan.command_text == "please bring me the water bottle"
     assert ("pick_object", "blue bottle") in [(s.action, s.args.get("object")) for s in plan.steps]

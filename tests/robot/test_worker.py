@@ -103,14 +103,14 @@ def test_estop_is_applied_before_the_next_physics_step(make_worker) -> None:
     worker = make_worker(realtime=True)
     events = worker.subscribe()
     worker.submit(RunCommand("say this is a long sentence that takes a few seconds to speak out loud"))
-    assert worker.wait_for(lambda s: s.mode == Mode.EXECUTING, 5.0)
+    assert worker.wait_for(lambda s: s.mode == Mode.EXECUTING, 30.0)
     sim_time_at_press = worker.state().sim_time_s
     assert worker.submit(EStop(source="test", client_time_s=time.time())).accepted
     latched = wait_event(events, "estop/latched")
     # Applied at the sim time of the press (at most the tick already under way), not a tick later.
     assert latched.sim_time_s <= sim_time_at_press + 1.0 / worker.control_hz + 1e-9
     assert latched.data["latency_ms"] >= 0
-    assert worker.wait_for(lambda s: s.mode == Mode.ESTOP and s.plan.state == PlanState.CANCELLED, 2.0)
+    assert worker.wait_for(lambda s: s.mode == Mode.ESTOP and s.plan.state == PlanState.CANCELLED, 30.0)
     assert worker.state().plan.steps[0].state == StepState.CANCELLED
 
 
@@ -131,7 +131,7 @@ def test_latched_estop_refuses_motion_and_release_restarts_nothing(make_worker) 
     worker = make_worker(realtime=True)
     worker.submit(RunCommand("say hello"))
     worker.submit(EStop(source="test"))
-    assert worker.wait_for(lambda s: s.estop_latched, 2.0)
+    assert worker.wait_for(lambda s: s.estop_latched, 30.0)
     for command in (RunCommand("say hi"), Replan(), ExecutePlan({"steps": [{"action": "say", "args": {"text": "x"}}]})):
         reply = worker.submit(command)
         assert not reply.accepted and reply.refusal == Refusal.ESTOP_LATCHED
@@ -158,13 +158,13 @@ def test_a_command_sent_just_before_an_estop_always_ends_cancelled(make_worker) 
         cancelled = lambda s, c=reply.command_id: (  # noqa: E731
             s.estop_latched and s.plan is not None and s.plan.command_id == c and s.plan.state == PlanState.CANCELLED
         )
-        assert worker.wait_for(cancelled, 3.0), attempt
-        assert worker.wait_for(lambda s: s.mode == Mode.ESTOP, 2.0)
-        for _ in range(50):  # the release is refused while the stop is still being applied
-            if worker.submit(ReleaseEStop()).accepted:
-                break
+        assert worker.wait_for(cancelled, 30.0), attempt
+        assert worker.wait_for(lambda s: s.mode == Mode.ESTOP, 30.0)
+        deadline = time.monotonic() + 30.0
+        # the release is refused while the stop is still being applied (longer on a loaded machine)
+        while not worker.submit(ReleaseEStop()).accepted and time.monotonic() < deadline:
             time.sleep(0.02)
-        assert worker.wait_for(lambda s: not s.estop_latched, 2.0)
+        assert worker.wait_for(lambda s: not s.estop_latched, 30.0)
 
 
 def test_replan_reruns_the_current_command_as_a_new_revision(make_worker) -> None:
@@ -180,7 +180,7 @@ def test_replan_reruns_the_current_command_as_a_new_revision(make_worker) -> Non
 def test_a_new_command_preempts_the_running_plan(make_worker) -> None:
     worker = make_worker(realtime=True)
     first = worker.submit(RunCommand("say this sentence is long enough to still be running in a moment"))
-    assert worker.wait_for(lambda s: s.mode == Mode.EXECUTING, 5.0)
+    assert worker.wait_for(lambda s: s.mode == Mode.EXECUTING, 30.0)
     second = worker.submit(RunCommand("say hi"))
     assert worker.wait_for(plan_done(second.command_id), 10.0)
     assert worker.state().plan.state == PlanState.SUCCEEDED
