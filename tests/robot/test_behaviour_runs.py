@@ -270,7 +270,7 @@ def test_a_walk_waits_standing_for_a_hot_servo_to_cool_and_says_so(make_worker, 
     worker = make_worker(realtime=False)
     assert worker.submit(InjectFault(Fault.SERVO_HEAT, "l_knee", 42.0)).accepted  # about 67 C
     assert worker.submit(StartBehaviour("stroll")).accepted
-    assert worker.wait_for(lambda s: s.behaviour is not None and s.behaviour.state != BehaviourState.RUNNING, 300.0)
+    assert worker.wait_for(lambda s: s.behaviour is not None and s.behaviour.state.finished, 300.0)
     state = worker.state()
     assert state.behaviour.state == BehaviourState.SUCCEEDED and not state.estop_latched
     resting, rested, walked = state.behaviour.feedback
