@@ -98,6 +98,25 @@ MatWay = tuple[tuple[float, float], tuple[float, float, float]]
 WAY_MOVED_M = 0.15
 
 
+# Within this of the way's entry, the way onto a mat is held (`HeldWay`).
+HOLD_WAY_WITHIN_M = 0.3
+
+
+class HeldWay:
+    """The way onto a mat as the map shows it, held once the robot is near its entry. The navigator asks the
+    approach again at the path's end, and walks straight onto what it gets: a way that changed there would be walked
+    across whatever changed it. Held, a late change is walked on a planned path (`_onto_mat`)."""
+
+    def __init__(self, way: Callable[[], MatWay], here: Callable[[], tuple[float, float]]) -> None:
+        self._way, self._here = way, here
+        self._held: MatWay | None = None
+
+    def __call__(self) -> MatWay:
+        if self._held is None or math.dist(self._here(), self._held[0]) > HOLD_WAY_WITHIN_M:
+            self._held = self._way()
+        return self._held
+
+
 def _entry_pose(way: MatWay) -> tuple[float, float, float]:
     """Where the walk onto the mat starts: the entry, turned to the stance's heading."""
     (x, y), stance = way
@@ -225,10 +244,13 @@ class NavigateSkill:
         """To the mat's entry, stopped there and turned to the stance's heading, then straight onto the stance:
         walking on without the stop, the robot came onto the pad still turning, 30-40 degrees aslant. `way` (the
         entry and the stance) is asked again on the walk there: which way has room shows on a map that grows as the
-        robot walks (from the start of a tour, before any map, the dock's own way looked open; a box stood on it)."""
-        report = navigator.go(lambda _pose: way()[0], lambda: _entry_pose(way()), back_away_m=self.back_away_m(ctx))
+        robot walks (from the start of a tour, before any map, the dock's own way looked open; a box stood on it),
+        and held near the entry (`HeldWay`); a change seen there is walked on a planned path."""
+        body = self.legs_and_map(ctx)
+        held = HeldWay(way, lambda: body.pose()[:2])
+        report = navigator.go(lambda _pose: held()[0], lambda: _entry_pose(held()), back_away_m=self.back_away_m(ctx))
         entry, stance = way()
-        if math.dist(self.legs_and_map(ctx).pose()[:2], entry) > WAY_MOVED_M:  # it changed at the last moment
+        if math.dist(body.pose()[:2], entry) > WAY_MOVED_M:  # it changed at the last moment
             again = navigator.go(entry, _entry_pose((entry, stance)))
             report.walked_m += again.walked_m
             report.sim_s += again.sim_s

@@ -20,6 +20,7 @@ from robot.sim.backend import MujocoSimBackend
 from robot.skills.navigate import (
     MAT_EDGE_KEEP_OFF_M,
     MAT_ENTRY_M,
+    HeldWay,
     entry_along,
     mat_entry,
     mat_under,
@@ -119,6 +120,22 @@ def test_the_way_off_the_pad_with_room_is_taken_over_one_that_passes_a_box_at_th
     beside_east = Box("box", east[0][0] - 0.05, east[0][1] + ROBOT_RADIUS + 0.08, 0.1, 0.07, 0.3)
     assert roomiest_ways(_grown_room(beside_east), on_pad, [east, north]) == [north]
     assert roomiest_ways(_grown_room(), on_pad, [east, north]) == [east, north]  # both open: the order kept
+
+
+def test_the_way_onto_the_pad_follows_the_map_on_the_walk_there_and_is_held_near_its_entry() -> None:
+    """The navigator walks straight from the path's end onto the way it is given there: a way changed at the entry
+    is not walked straight (it is walked on a planned path after the navigator's walk)."""
+    north, east = ((0.0, 1.0), (0.0, 0.5, math.pi / 2)), ((1.0, 0.0), (0.5, 0.0, 0.0))
+    shown, here = [north], [(3.0, 3.0)]
+    way = HeldWay(lambda: shown[0], lambda: here[0])
+    assert way() == north
+    shown[0] = east  # the map grew: the north way is blocked
+    assert way() == east  # far from the entry: the way as the map now shows it
+    here[0] = (1.1, 0.1)  # at the east entry
+    shown[0] = north
+    assert way() == east  # held
+    here[0] = (2.0, 2.0)  # walked away from it (a replan)
+    assert way() == north
 
 
 def test_where_no_way_has_the_usual_room_the_ways_the_footprint_clears_are_kept() -> None:
