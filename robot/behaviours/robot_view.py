@@ -24,11 +24,13 @@ from robot.planning.world_context import WorldContext
 from robot.skills.body import BodyParts
 from robot.skills.catalogue import Skills
 
-# A behaviour's walk starts only with every servo below the diagnostics' warning (65 C): above it the robot stands
-# and rests until the hottest is COOL_MARGIN_K below that. Walking warms the knees ~0.3 K a second in simulation, and
-# a long patrol reached 75 C, where the diagnostics stop the robot (bench world seed 18); a patrol until stopped would
-# always end so.
-COOL_MARGIN_K = 8.0
+# A behaviour's walk starts only with every servo WALK_HEADROOM_K below the diagnostics' warning (65 C), 20 K below
+# where they stop the robot (75 C): hotter, the robot stands and rests until the hottest is COOL_MARGIN_K cooler
+# still. Walking warms the knees ~0.3 K a second in simulation (they settle near 150 C walking, 37 C standing, with a
+# time constant of 6 min): a long patrol reached 75 C (bench world seed 18), and so did one whose last walk started
+# just below the warning (65 s of walking from 61 C). From 55 C a knee takes about 85 s of walking to reach 75 C.
+WALK_HEADROOM_K = 10.0
+COOL_MARGIN_K = 5.0
 REST_CHECK_S = 2.0
 MAX_REST_S = 900.0
 
@@ -154,15 +156,16 @@ class BehaviourRobot:
         return self._do("navigate_to", upcoming, target=target)
 
     def rest_if_hot(self) -> None:
-        """Stand still while a servo is hot, saying so, until it has cooled (`COOL_MARGIN_K`): walking on, it would
-        heat to where the diagnostics stop the robot. `BehaviourFailed` if it stays hot for `MAX_REST_S`."""
+        """Stand still while a servo is too hot for a walk (`WALK_HEADROOM_K`), saying so, until it has cooled
+        (`COOL_MARGIN_K`): walking on, it would heat to where the diagnostics stop the robot. `BehaviourFailed` if
+        it stays hot for `MAX_REST_S`."""
         heat = self._parts.servo_heat
         if heat is None:
             return
         joint, temperature = heat.hottest()
-        if temperature < heat.hot_c:
+        if temperature < heat.hot_c - WALK_HEADROOM_K:
             return
-        cool_c = heat.hot_c - COOL_MARGIN_K
+        cool_c = heat.hot_c - WALK_HEADROOM_K - COOL_MARGIN_K
         self.feedback(f"resting: the {joint} servo is at {temperature:.0f} C; walking on below {cool_c:.0f} C")
         started = self.sim_time_s
         while temperature >= cool_c:

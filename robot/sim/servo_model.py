@@ -5,9 +5,9 @@ they mean on the real robot (a servo held near stall for minutes gets hot, and t
 The thermal model is one first-order lump per servo: copper losses I^2 R heat the winding, which loses heat to
 the air through a thermal resistance. With the defaults a servo at 1 A (5.2 W) settles 31 K over ambient, with a
 time constant of 6 min. Measured (stop 76): the simulated walk's knees draw about 1.8 A rms, often the stall
-current, and warm about 0.3 K a second: 65 C after some 2.5 min of walking, where a behaviour rests before it walks
-on (`BehaviourRobot.rest_if_hot`); standing, a knee cools from 67 to 57 C in about 2.5 min. Whether the real OP3's
-knees draw that much walking is not measured here.
+current, and warm about 0.3 K a second: 55 C after some 100 s of walking, where a behaviour rests before it walks
+on (`BehaviourRobot.rest_if_hot`); standing, a knee cools from 67 to 57 C in about 2.5 min (it settles near
+37 C). Whether the real OP3's knees draw that much walking is not measured here.
 """
 
 from __future__ import annotations
