@@ -70,6 +70,13 @@ class BehaviourRobot:
         self._ctx = ctx
         self._reporter = reporter
         self._plan = plan
+        self._rested_s = 0.0
+
+    @property
+    def rested_s(self) -> float:
+        """Simulated seconds spent resting for the servos' heat (`rest_if_hot`): the robot's time, not the step's
+        (the runner does not count it against the step's timeout)."""
+        return self._rested_s
 
     # ---------------------------------------------------------------------------------------------------------
     # what the robot knows
@@ -175,6 +182,7 @@ class BehaviourRobot:
                     f"the {joint} servo is still at {temperature:.0f} C after {minutes:.0f} min of rest"
                 )
             self.wait(REST_CHECK_S)
+            self._rested_s += REST_CHECK_S
             joint, temperature = heat.hottest()
         self.feedback(f"rested {self.sim_time_s - started:.0f} s: the hottest servo is at {temperature:.0f} C")
 

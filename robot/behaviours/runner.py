@@ -370,7 +370,7 @@ class BehaviourRunner:
         thread.start()
         try:
             while thread.is_alive():
-                if p.parts.clock.now() > deadline:
+                if p.parts.clock.now() > deadline + robot.rested_s:  # a rest for hot servos is not the step's
                     raise BehaviourFailed(f"state {state!r} overran its step timeout of {timeout:g} s")
                 ctx.wait_sim(0.02)
         finally:
