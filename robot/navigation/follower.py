@@ -66,9 +66,6 @@ class PathFollower:
         self.length = float(self._arc[-1])
         self.progress = 0.0  # arc length of the robot's nearest point on the path
         self.end_speed = end_speed
-        # +1 or -1: which way round to turn while the heading error is a half turn or more (the long way round where
-        # the shorter one would sweep the hands into something: robot.navigation.turn_sweep); 0: the shorter way
-        self.turn_way = 0.0
 
     def point_at(self, s: float) -> tuple[float, float]:
         """The path's point `s` metres from its start (clamped to its ends)."""
@@ -111,28 +108,12 @@ class PathFollower:
         tx, ty = self.point_at(self.progress + lookahead)
         if math.dist((x, y), (tx, ty)) < 1e-6:
             tx, ty = goal
-        error = self._turn_error(math.remainder(math.atan2(ty - y, tx - x) - yaw, math.tau))
+        error = math.remainder(math.atan2(ty - y, tx - x) - yaw, math.tau)
         yaw_rate = max(-MAX_TURN_RAD_S, min(MAX_TURN_RAD_S, HEADING_GAIN * error))
         if abs(error) > (TURN_IN_PLACE_RAD if lookahead >= LOOKAHEAD_M else CLOSE_TURN_IN_PLACE_RAD):
             return FollowCommand(0.0, 0.0, yaw_rate, False, remaining)
         speed = MAX_FORWARD_M_S * min(1.0, remaining / SLOW_DOWN_M + self.end_speed) * math.cos(error) ** 2
         return FollowCommand(speed, 0.0, yaw_rate, False, remaining)
-
-    def first_heading_error(self, x: float, y: float, yaw: float) -> float:
-        """The heading error the robot at (x, y, yaw) starts the path with (+-pi), as `update` would steer."""
-        tx, ty = self.point_at(self.progress + LOOKAHEAD_M)
-        return math.remainder(math.atan2(ty - y, tx - x) - yaw, math.tau)
-
-    def _turn_error(self, error: float) -> float:
-        """The heading error the long way round while `turn_way` asks for it; the turn about done, the shorter way."""
-        if self.turn_way == 0.0:
-            return error
-        if abs(error) < math.pi / 2:
-            self.turn_way = 0.0
-            return error
-        if math.copysign(1.0, error) != self.turn_way:
-            return error - math.copysign(math.tau, error)
-        return error
 
     def _lookahead(self, x: float, y: float, blocked_at: Callable[[float, float], bool] | None) -> float:
         """How far along the path to steer at: LOOKAHEAD_M, shortened until the straight way there is clear."""

@@ -34,7 +34,6 @@ from robot.navigation.follower import (
     PathFollower,
 )
 from robot.navigation.grid_planner import astar, line_free, nearest_free, simplify
-from robot.navigation.turn_sweep import TURN_ABOUT_RAD, turn_way
 
 CLEARANCE_M = NAV_CLEARANCE_M  # beyond the footprint: a walking robot sways, and its arms reach past its feet
 # Carrying something, the arm is held out to the front and side, and pure pursuit cuts a corner by a few cm: at
@@ -520,7 +519,7 @@ class Navigator:
         path = self._start_path(goal, facing)
         report.path = tuple(path)
         self._on_update(NavigationState(self._goal, report.path, report.replans))
-        follower = self._follower(path, end_speed)
+        follower = PathFollower(path, end_speed)
         last_check = best_time = self._now()
         best_remaining = math.inf
         turn = _TurnWatch()
@@ -543,7 +542,7 @@ class Navigator:
                 path = self._replan(body.pose()[:2], goal, facing)
                 report.path = tuple(path)
                 self._on_update(NavigationState(self._goal, report.path, report.replans))
-                follower = self._follower(path, end_speed)
+                follower = PathFollower(path, end_speed)
                 turn = _TurnWatch()
                 continue
             if command.remaining_m < best_remaining - 0.05:
@@ -565,7 +564,7 @@ class Navigator:
                         report.walked_m += follower.progress
                         report.path = tuple(path)
                         self._on_update(NavigationState(self._goal, report.path, report.replans))
-                        follower = self._follower(path, end_speed)
+                        follower = PathFollower(path, end_speed)
                         continue
             costmap = self._costmap()
             if costmap is not checked_map and now > checked_at:  # a new map: is the way still clear?
@@ -582,7 +581,7 @@ class Navigator:
                     report.replans += 1
                     report.path = tuple(path)
                     self._on_update(NavigationState(self._goal, report.path, report.replans))
-                    follower = self._follower(path, end_speed)
+                    follower = PathFollower(path, end_speed)
                     best_remaining, best_time = math.inf, self._now()
                     continue
             body.drive(command.vx * self._speed_up(follower, command, x, y), command.vy, command.yaw_rate)
@@ -599,19 +598,6 @@ class Navigator:
             self._step_clear()
             path = self._plan_or_wait(self.body.pose()[:2], goal, facing, clearance_m)
         return path
-
-    def _follower(self, path: list[tuple[float, float]], end_speed: float) -> PathFollower:
-        """A follower for `path` from where the robot stands; a turn about at its start goes the way round that
-        passes the hands farthest from what is mapped near (`turn_way`)."""
-        follower = PathFollower(path, end_speed)
-        x, y, yaw = self.body.pose()
-        error = follower.first_heading_error(x, y, yaw)
-        obstacles = self.body.costmap(0.0, off_mat_edges=False) if abs(error) >= TURN_ABOUT_RAD else None
-        if obstacles is not None:
-            c, s = math.cos(yaw), math.sin(yaw)
-            near = _obstacle_points(obstacles, x, y, self.turn_room_m or TURN_ROOM_M) - (x, y)
-            follower.turn_way = turn_way(near @ np.array([[c, -s], [s, c]]), error)
-        return follower
 
     def _turns_first(self, path: list[tuple[float, float]]) -> bool:
         """Whether the follower would start `path` with a turn in place."""
