@@ -121,6 +121,16 @@ FOOT_AHEAD_M = 0.05
 STEP_CLEAR_SETTLE_S = 2.0
 STEP_CLEAR_SEARCH_M = 0.4
 STEP_CLEAR_DIRECTIONS = 16
+# A path that starts with a turn about (TURN_ABOUT_RAD or more) where the robot has no room to turn, even after a step
+# clear, is walked backwards (at BACK_AWAY_M_S) as far as its first point with room, up to BACK_OUT_MAX_M along it;
+# the robot turns there. Between a wall and a table 0.5 m apart a replan reversed a patrol, and turning about where it
+# stood put its fingers on the wall whichever way it turned (world seed 18).
+TURN_ABOUT_RAD = math.radians(150.0)
+BACK_OUT_MAX_M = 1.5
+BACK_OUT_CHECK_M = 0.05
+# The backward walk aims this far past that point (a follower arrives up to 8 cm short of its path's end), and stops
+# as soon as the robot has the room.
+BACK_OUT_PAST_M = 0.15
 # Backing away from a surface before turning (a carried object held out over it would sweep along it).
 BACK_AWAY_M_S = 0.1
 BACK_AWAY_HEADING_GAIN = 1.0
@@ -597,7 +607,62 @@ class Navigator:
         if not self._room_to_turn(path):
             self._step_clear()
             path = self._plan_or_wait(self.body.pose()[:2], goal, facing, clearance_m)
+            if not self._room_to_turn(path) and self._backs_out(path):
+                path = self._plan_or_wait(self.body.pose()[:2], goal, facing, clearance_m)
         return path
+
+    def _backs_out(self, path: list[tuple[float, float]]) -> bool:
+        """Walk backwards along `path`, which starts with a turn about, to its first point with room to turn
+        (`_room_along`); whether it did (False: no such point near, and the robot turns where it stands)."""
+        x, y, yaw = self.body.pose()
+        if (
+            len(path) < 2
+            or abs(math.remainder(math.atan2(path[1][1] - y, path[1][0] - x) - yaw, math.tau)) < TURN_ABOUT_RAD
+        ):
+            return False
+        follower = PathFollower(path, STOP_END_SPEED)
+        room_at = self._room_along(follower)
+        if room_at is None:
+            return False
+        self._on_update(NavigationState(self._goal, tuple(path), 0, "backing out"))
+        end = min(room_at + BACK_OUT_PAST_M, follower.length)
+        self._walk_backwards(PathFollower([follower.point_at(s) for s in np.arange(0.0, end + 1e-9, 0.05)]))
+        return True
+
+    def _room_along(self, follower: PathFollower) -> float | None:
+        """How far along the follower's path (within BACK_OUT_MAX_M) the first point is with nothing on the map
+        within the turning room, and no foot on a mat's edge; None if there is none."""
+        obstacles = self.body.costmap(0.0, off_mat_edges=False)
+        standing = self.body.costmap(0.0)
+        if obstacles is None:
+            return None
+        for s in np.arange(BACK_OUT_CHECK_M, min(BACK_OUT_MAX_M, follower.length) + 1e-9, BACK_OUT_CHECK_M):
+            point = follower.point_at(float(s))
+            if standing is not None and standing.blocked_at(*point):
+                continue
+            if len(_obstacle_points(obstacles, *point, self.turn_room_m)) == 0:
+                return float(s)
+        return None
+
+    def _walk_backwards(self, follower: PathFollower) -> None:
+        """Follow a path facing away from it (the follower steers a robot turned about), at BACK_AWAY_M_S, until
+        the robot has room to turn."""
+        body = self.body
+        scale = BACK_AWAY_M_S / MAX_FORWARD_M_S
+        deadline = self._now() + follower.length / BACK_AWAY_M_S + STUCK_S
+        obstacles = body.costmap(0.0, off_mat_edges=False)
+        while self._now() < deadline:
+            self._check_fall()
+            x, y, yaw = body.pose()
+            if obstacles is not None and len(_obstacle_points(obstacles, x, y, self.turn_room_m)) == 0:
+                break
+            sight = body.costmap(ROBOT_RADIUS + SIGHT_CLEARANCE_M, off_mat_edges=False)
+            command = follower.update(x, y, yaw + math.pi, None if sight is None else sight.blocked_at)
+            if command.arrived:
+                break
+            body.drive(-command.vx * scale, -command.vy * scale, command.yaw_rate)
+            body.wait(CONTROL_PERIOD_S)
+        self._stop()
 
     def _turns_first(self, path: list[tuple[float, float]]) -> bool:
         """Whether the follower would start `path` with a turn in place."""

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from robot.navigation.costmap import Costmap
-from robot.navigation.follower import MAX_FORWARD_M_S, MAX_TURN_RAD_S, PathFollower
+from robot.navigation.follower import MAX_FORWARD_M_S, MAX_TURN_RAD_S, SIDE_STEP_M_S, PathFollower
 from robot.navigation.grid_planner import astar, inflate, simplify
 from robot.navigation.navigator import LEAD_IN_M, LEAD_IN_MAX_DETOUR_M, arrival_point, plan_path
 
@@ -55,15 +55,16 @@ def test_simplify_keeps_only_the_corners_of_a_free_path() -> None:
 def _drive(
     follower: PathFollower, x: float, y: float, yaw: float, blocked_at: Callable[[float, float], bool] | None = None
 ) -> tuple[bool, list[tuple[float, float, float]]]:
-    """A unicycle that does exactly what the follower says, 0.1 s a step: whether it arrived, and its track."""
+    """A walker that does exactly what the follower says, 0.1 s a step: whether it arrived, and its track."""
     track, dt = [(x, y, yaw)], 0.1
     for _ in range(2000):
         command = follower.update(x, y, yaw, blocked_at)
         if command.arrived:
             return True, track
-        assert 0.0 <= command.vx <= MAX_FORWARD_M_S + 1e-9 and abs(command.yaw_rate) <= MAX_TURN_RAD_S + 1e-9
-        x += command.vx * math.cos(yaw) * dt
-        y += command.vx * math.sin(yaw) * dt
+        assert -SIDE_STEP_M_S <= command.vx <= MAX_FORWARD_M_S + 1e-9 and abs(command.yaw_rate) <= MAX_TURN_RAD_S + 1e-9
+        assert abs(command.vy) <= SIDE_STEP_M_S + 1e-9
+        x += (command.vx * math.cos(yaw) - command.vy * math.sin(yaw)) * dt
+        y += (command.vx * math.sin(yaw) + command.vy * math.cos(yaw)) * dt
         yaw += command.yaw_rate * dt
         track.append((x, y, yaw))
     return False, track
@@ -103,6 +104,21 @@ def test_a_robot_off_its_path_by_a_corner_steers_back_onto_the_path_not_round_th
     arrived, seeing = _drive(PathFollower(path), *robot, grown.blocked_at)
     assert arrived and math.dist(seeing[-1][:2], path[-1]) < 0.1
     assert closest(seeing) > start - 0.01
+
+
+def test_a_robot_beside_its_path_along_a_wall_steps_back_onto_it_without_turning_towards_the_wall() -> None:
+    """World seed 18's patrol: 6 cm off its path into a wall's margin, heading along the path, the follower turned
+    50 deg in place back towards the path, and the hands (behind the trunk's centre) swung onto the wall. It steps
+    sideways instead, keeping its heading along the path."""
+    wall_y = 1.5  # a wall north of a path running west along y = 1.2, grown 0.24 m (footprint and berth)
+    grown = _open_costmap(((-2.0, 2.0, wall_y - 0.24, 1.5),))
+    path = [(1.0, 1.2), (-1.5, 1.2)]
+    assert not grown.blocked_at(*path[0]) and grown.blocked_at(0.9, 1.27)
+    robot = (0.9, 1.31, math.radians(-174.0))  # beside its path, in the margin, heading west
+    arrived, track = _drive(PathFollower(path), *robot, grown.blocked_at)
+    assert arrived and math.dist(track[-1][:2], path[-1]) < 0.1
+    assert max(abs(math.remainder(yaw - math.pi, math.tau)) for _, _, yaw in track) < math.radians(15.0)
+    assert max(y for _, y, _ in track) <= robot[1] + 1e-9  # never nearer the wall
 
 
 def _open_costmap(blocked_boxes: tuple[tuple[float, float, float, float], ...] = ()) -> Costmap:

@@ -248,6 +248,21 @@ def test_a_robot_stepping_clear_keeps_its_feet_off_a_mats_edge() -> None:
     assert report.final_error_m < 0.1
 
 
+def test_a_robot_that_must_turn_about_in_a_corridor_walks_backwards_out_of_it_and_turns_where_there_is_room() -> None:
+    """Between a wall and a table 0.5 m apart a replan reversed a patrol: turning about there, it put its fingers on
+    the wall whichever way it turned (world seed 18). It walks backwards along its new path until it has room."""
+    walls = [(x / 20.0, y) for x in range(-12, 21) for y in (-0.26, 0.26)]  # x from -0.6 to 1.0
+    body = MappedBody(_map_with(*walls))
+    cells = np.array([body.map.centre(i, j) for i, j in np.argwhere(body.map.blocked)])
+    states: list[NavigationState] = []
+    report = Navigator(body, lambda: body.t, on_update=states.append).go((-1.6, 0.0))  # behind it: a half turn
+    assert report.final_error_m < 0.1
+    assert "backing out" in [state.phase for state in states]
+    turned = [(x, y) for x, y, yaw in body.track if abs(math.remainder(yaw, math.tau)) > math.radians(20.0)]
+    assert turned and min(float(np.min(np.hypot(cells[:, 0] - x, cells[:, 1] - y))) for x, y in turned) >= TURN_ROOM_M
+    assert min(float(np.min(np.hypot(cells[:, 0] - x, cells[:, 1] - y))) for x, y, _ in body.track) > 0.2
+
+
 def _turns_where_it_stands(body: MappedBody) -> bool:
     first_move = next(i for i, command in enumerate(body.commands) if command != (0.0, 0.0, 0.0))
     vx, vy, w = body.commands[first_move]
