@@ -615,12 +615,10 @@ class Navigator:
         """Walk backwards along `path`, which starts with a turn about, to its first point with room to turn
         (`_room_along`); whether it did (False: no such point near, and the robot turns where it stands)."""
         x, y, yaw = self.body.pose()
-        if (
-            len(path) < 2
-            or abs(math.remainder(math.atan2(path[1][1] - y, path[1][0] - x) - yaw, math.tau)) < TURN_ABOUT_RAD
-        ):
-            return False
         follower = PathFollower(path, STOP_END_SPEED)
+        ahead = follower.point_at(LOOKAHEAD_M)  # where the follower steers (a path's first hop may be a few cm)
+        if abs(math.remainder(math.atan2(ahead[1] - y, ahead[0] - x) - yaw, math.tau)) < TURN_ABOUT_RAD:
+            return False
         room_at = self._room_along(follower)
         if room_at is None:
             return False
