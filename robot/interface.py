@@ -493,7 +493,7 @@ class NavigationState:
     goal: tuple[float, float, float]  # x, y, heading
     path: tuple[tuple[float, float], ...]
     replans: int = 0
-    phase: str = "following"  # backing away | backing out | following | approaching | arrived
+    phase: str = "following"  # backing away | backing out | following | resting | approaching | arrived
 
 
 @dataclass(frozen=True)

@@ -71,12 +71,13 @@ class BehaviourRobot:
         self._reporter = reporter
         self._plan = plan
         self._rested_s = 0.0
+        self._walks_rested_before_s = skills.navigate.rested_s
 
     @property
     def rested_s(self) -> float:
-        """Simulated seconds spent resting for the servos' heat (`rest_if_hot`): the robot's time, not the step's
-        (the runner does not count it against the step's timeout)."""
-        return self._rested_s
+        """Simulated seconds spent resting for the servos' heat, before a walk (`rest_if_hot`) or partway through one
+        (`ServoRest`): the robot's time, not the step's (the runner does not count it against the step's timeout)."""
+        return self._rested_s + self._skills.navigate.rested_s - self._walks_rested_before_s
 
     # ---------------------------------------------------------------------------------------------------------
     # what the robot knows

@@ -164,6 +164,17 @@ class NavBody(Protocol):
     def fallen(self) -> bool: ...
 
 
+class WalkRest(Protocol):
+    """When a walk must stop partway for the robot's sake (a servo too hot to walk on), and the rest itself."""
+
+    def needed(self) -> bool:
+        """Whether the robot must stand before it walks on."""
+
+    def rest(self) -> None:
+        """Stand (the navigator has stopped the walk) until the robot may walk on; raise `NavigationFailed` if it
+        cannot."""
+
+
 @dataclass
 class NavigationReport:
     walked_m: float = 0.0  # along the planned paths actually followed, plus the final approach
@@ -387,16 +398,20 @@ class Navigator:
         clearance_m: float = CLEARANCE_M,
         open_speed_m_s: float = OPEN_M_S,
         turn_room_m: float = TURN_ROOM_M,
+        walk_rest: WalkRest | None = None,
     ) -> None:
         """`stop_drift` is shared by the navigations of one robot (what one stop taught serves the next).
         `clearance_m`: the berth its paths keep from obstacles where there is room, beyond the footprint (a robot
         carrying something needs CARRYING_CLEARANCE_M); CLEARANCE_M at least. `open_speed_m_s`: the speed in the open
         (see OPEN_M_S; a carrying robot's is the follower's usual speed). `turn_room_m`: see TURN_ROOM_M (0: never
-        step clear before turning; a robot carrying something, its arm held out in front, does not)."""
+        step clear before turning; a robot carrying something, its arm held out in front, does not). `walk_rest`:
+        asked at every new map while the robot follows a path; where it needs a rest, the robot stops, rests and
+        walks on, on a new path from where it stands."""
         self.body = body
         self.clearance_m = clearance_m
         self.open_speed_m_s = open_speed_m_s
         self.turn_room_m = turn_room_m
+        self.walk_rest = walk_rest
         self.stop_drift = stop_drift if stop_drift is not None else StopDrift()
         self._now = sim_time
         self._on_update = on_update or (lambda state: None)
@@ -579,6 +594,16 @@ class Navigator:
             costmap = self._costmap()
             if costmap is not checked_map and now > checked_at:  # a new map: is the way still clear?
                 checked_map, checked_at = costmap, now
+                if self.walk_rest is not None and self.walk_rest.needed():
+                    report.walked_m += follower.progress
+                    self._rest(report)
+                    path = self._start_path(goal, facing)
+                    report.path = tuple(path)
+                    self._on_update(NavigationState(self._goal, report.path, report.replans))
+                    follower = PathFollower(path, end_speed)
+                    turn = _TurnWatch()
+                    best_remaining, best_time = math.inf, self._now()
+                    continue
                 if _path_blocked(costmap, follower):
                     report.walked_m += follower.progress
                     path = self._replan((x, y), goal, facing)
@@ -598,6 +623,14 @@ class Navigator:
             body.wait(CONTROL_PERIOD_S)
         if stop_at_end:
             self._stop()
+
+    def _rest(self, report: NavigationReport) -> None:
+        """Stop, and stand for `walk_rest` (shown as the walk's "resting" phase)."""
+        if self.walk_rest is None:
+            return
+        self._stop()
+        self._on_update(NavigationState(self._goal, report.path, report.replans, "resting"))
+        self.walk_rest.rest()
 
     def _start_path(
         self, goal: tuple[float, float], facing: float | None, clearance_m: float | None = None

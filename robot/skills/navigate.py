@@ -30,6 +30,7 @@ from robot.perception.geometry import yaw_of
 from robot.planning.executor import ExecutionContext, StepFailed
 from robot.planning.world_context import WorldContext
 from robot.skills.body import BodyParts, Legs, Localiser, PerceptionView
+from robot.skills.walk_rest import ServoRest
 
 CARRY_CLEARANCE_M = 0.02  # between the carried object and a surface's edge, before turning away from it
 MIN_STEP_BACK_M = 0.04
@@ -203,6 +204,15 @@ class NavigateSkill:
         self._work_pose = work_pose
         self._stop_drift = StopDrift()  # what stopping a walk does to the pose, learnt by every final approach
         self._navigation: NavigationState | None = None
+        self._rested_s = 0.0
+
+    @property
+    def rested_s(self) -> float:
+        """Simulated seconds this robot's walks have stood partway to let a hot servo cool (`ServoRest`)."""
+        return self._rested_s
+
+    def _add_rested(self, seconds: float) -> None:
+        self._rested_s += seconds
 
     @property
     def navigation(self) -> NavigationState | None:
@@ -230,8 +240,10 @@ class NavigateSkill:
         speed = MAX_FORWARD_M_S if carrying else OPEN_M_S
         turn_room = 0.0 if carrying else TURN_ROOM_M
         clock = self._parts.clock
+        heat = self._parts.servo_heat
+        rest = None if heat is None else ServoRest(heat, ctx.wait_sim, clock.now, self._publish, self._add_rested)
         return Navigator(
-            self.legs_and_map(ctx), clock.now, self.set_navigation, self._stop_drift, clearance, speed, turn_room
+            self.legs_and_map(ctx), clock.now, self.set_navigation, self._stop_drift, clearance, speed, turn_room, rest
         )
 
     def _onto_mat(
