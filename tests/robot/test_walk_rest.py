@@ -3,12 +3,17 @@ waits for the servo to cool, says so, and gives up when it does not cool."""
 
 from __future__ import annotations
 
+import math
+import re
+
 import pytest
 
-from robot.interface import NavigationState
+from robot.interface import ExecutePlan, Fault, InjectFault, NavigationState, PlanState
 from robot.navigation.navigator import NavigationFailed, Navigator
 from robot.skills.walk_rest import MAX_REST_S, REST_COOL_K, ServoRest
 from tests.robot.test_navigator import MappedBody, _map_with
+
+FINISHED = (PlanState.SUCCEEDED, PlanState.FAILED, PlanState.CANCELLED)
 
 
 class HotKnee:
@@ -95,3 +100,34 @@ def test_without_a_hot_servo_a_walk_does_not_stop_partway() -> None:
     Navigator(body, lambda: body.t, on_update=states.append, walk_rest=StandingRest(heat, body, events)).go((1.5, 0.0))
     assert events == [] and "resting" not in [s.phase for s in states]
     assert body.stops == 1
+
+
+def test_a_robot_whose_knee_reaches_the_warning_on_a_walk_rests_partway_and_still_gets_there(make_worker) -> None:
+    """The whole robot: a knee heated by fault injection to just under the warning (65 C) reaches it on the walk; the
+    robot stops and stands until the knee is at 50 C, without the diagnostics stopping it, then walks on."""
+    worker = make_worker(realtime=False, perception=True, max_auto_replans=0)
+    events = worker.subscribe()
+    start = worker.layout.robot_start
+    goal = (start[0], start[1] + 0.8)  # open floor north of the start (seed 0)
+    assert worker.wait_for(lambda s: worker.diagnostics() is not None, 60.0)
+    knee = next(s for s in worker.diagnostics().statuses if s.name == "servos/l_knee")
+    warm_by = 64.0 - float(dict(knee.values)["temperature_c"])
+    assert worker.submit(InjectFault(Fault.SERVO_HEAT, "l_knee", warm_by)).accepted
+    walk = worker.submit(ExecutePlan({"steps": [{"action": "navigate_to", "target": f"{goal[0]:.2f}, {goal[1]:.2f}"}]}))
+    assert walk.accepted
+    assert worker.wait_for(
+        lambda s: s.navigation is not None and s.navigation.phase == "resting" and s.locomotion.phase == "standing",
+        600.0,
+    )
+    assert worker.wait_for(lambda s: s.plan is not None and s.plan.state in FINISHED, 900.0)
+    state = worker.state()
+    assert state.plan.state == PlanState.SUCCEEDED, [s.detail for s in state.plan.steps]
+    assert not state.estop_latched and not state.fallen
+    assert math.dist(state.base_position[:2], goal) < 0.1
+    kinds = []
+    while (event := events.get(timeout=0.05)) is not None:
+        kinds.append((event.kind, event.message))
+    resting = [message for kind, message in kinds if kind == "navigation/resting"]
+    rested = [message for kind, message in kinds if kind == "navigation/rested"]
+    assert len(resting) == 1 and resting[0].startswith("resting partway: the l_knee servo is at 6")
+    assert len(rested) == 1 and re.fullmatch(r"rested \d+ s: the hottest servo is at (49|50) C", rested[0])
