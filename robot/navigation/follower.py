@@ -45,7 +45,7 @@ CLOSE_TURN_IN_PLACE_RAD = math.radians(15.0)
 # Where the lookahead had to be shortened and the robot already heads along the path (within SIDE_STEP_MAX_RAD of
 # it), it steps sideways and on towards the point steered at (at SIDE_STEP_M_S) instead of turning in place: it is
 # beside its path, in the margin of something. Turning in place there swings the hands, which hang behind the trunk's
-# centre, towards what it is beside: a patrol 5 cm off its path along a wall turned 50 deg back towards the path and
+# centre, towards what it is beside: a patrol 6 cm off its path along a wall turned 50 deg back towards the path and
 # put a finger on the wall (world seed 18).
 SIDE_STEP_MAX_RAD = math.radians(30.0)
 SIDE_STEP_M_S = 0.05
