@@ -233,6 +233,9 @@ class BusStats:
     packets_in: int = 0
     replies: int = 0
     busy_s: float = 0.0  # wire time of everything sent both ways, at the bus's baud rate
+    reads_at: dict[int, int] = dataclasses.field(
+        default_factory=dict
+    )  # read requests by their first address (what was asked)
 
 
 class BusPlant(Protocol):
@@ -300,12 +303,13 @@ class EmulatedBus:
         kind, *args = request
         with self._lock:
             if kind == "stats":
-                return dataclasses.replace(self.stats)
+                return dataclasses.replace(self.stats, reads_at=dict(self.stats.reads_at))
             servo = self.servos[args[0]]
             if kind == "fault":
                 setattr(servo.faults, args[1], args[2])
             elif kind == "temperature":
                 servo.temperature_c = float(args[1])
+                servo.step(0.0)  # its errors and present temperature now, not at its next step: a read may come first
             elif kind == "load":
                 servo.load_nm = float(args[1])
             elif kind == "field":
@@ -432,6 +436,9 @@ class EmulatedBus:
             servo.last_heard_s = now
         instruction = packet.instruction
         reads_all = instruction in (Instruction.FAST_SYNC_READ, Instruction.SYNC_READ)
+        if (reads_all or instruction == Instruction.READ) and len(p) >= 4:
+            address = p[0] | p[1] << 8
+            self.stats.reads_at[address] = self.stats.reads_at.get(address, 0) + 1
         if reads_all and packet.packet_id == BROADCAST_ID and len(p) >= 4 and self._plant is not None:
             self._plant.before_sync_read(p[0] | p[1] << 8, p[2] | p[3] << 8)
         if instruction == Instruction.FAST_SYNC_READ and packet.packet_id == BROADCAST_ID and len(p) >= 4:

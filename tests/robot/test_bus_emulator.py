@@ -111,7 +111,6 @@ def test_faults_a_dead_servo_timeouts_crc_errors_and_overheating(bus) -> None:
 
     packets.write1ByteTxRx(port, 7, ct.TORQUE_ENABLE.address, 1)
     emulator.set_temperature(7, 85.0)
-    time.sleep(0.05)
     value, result, error = packets.read1ByteTxRx(port, 7, ct.HARDWARE_ERROR_STATUS.address)
     assert result == COMM_SUCCESS and error & ALERT_BIT and HardwareError(value) == HardwareError.OVERHEATING
     assert packets.read1ByteTxRx(port, 7, ct.TORQUE_ENABLE.address)[0] == 0  # it cut its own torque
