@@ -23,6 +23,7 @@ from robot.planning.planner import PlanningError
 from robot.planning.world_context import WorldContext
 from robot.skills.body import BodyParts
 from robot.skills.catalogue import Skills
+from robot.skills.walk_rest import StillHot, stand_until_cool
 
 # A behaviour's walk starts only with every servo WALK_HEADROOM_K below the diagnostics' warning (65 C), 20 K below
 # where they stop the robot (75 C): hotter, the robot stands and rests until the hottest is COOL_MARGIN_K cooler
@@ -31,8 +32,6 @@ from robot.skills.catalogue import Skills
 # just below the warning (65 s of walking from 61 C). From 55 C a knee takes about 85 s of walking to reach 75 C.
 WALK_HEADROOM_K = 10.0
 COOL_MARGIN_K = 5.0
-REST_CHECK_S = 2.0
-MAX_REST_S = 900.0
 
 
 class Reporter(Protocol):
@@ -166,7 +165,7 @@ class BehaviourRobot:
     def rest_if_hot(self) -> None:
         """Stand still while a servo is too hot for a walk (`WALK_HEADROOM_K`), saying so, until it has cooled
         (`COOL_MARGIN_K`): walking on, it would heat to where the diagnostics stop the robot. `BehaviourFailed` if
-        it stays hot for `MAX_REST_S`."""
+        it stays hot for `walk_rest.MAX_REST_S`."""
         heat = self._parts.servo_heat
         if heat is None:
             return
@@ -176,16 +175,14 @@ class BehaviourRobot:
         cool_c = heat.hot_c - WALK_HEADROOM_K - COOL_MARGIN_K
         self.feedback(f"resting: the {joint} servo is at {temperature:.0f} C; walking on below {cool_c:.0f} C")
         started = self.sim_time_s
-        while temperature >= cool_c:
-            if self.sim_time_s - started >= MAX_REST_S:
-                minutes = MAX_REST_S / 60
-                raise BehaviourFailed(
-                    f"the {joint} servo is still at {temperature:.0f} C after {minutes:.0f} min of rest"
-                )
-            self.wait(REST_CHECK_S)
-            self._rested_s += REST_CHECK_S
-            joint, temperature = heat.hottest()
+        try:
+            joint, temperature = stand_until_cool(heat, cool_c, self.wait, self._count_rest)
+        except StillHot as hot:
+            raise BehaviourFailed(str(hot)) from hot
         self.feedback(f"rested {self.sim_time_s - started:.0f} s: the hottest servo is at {temperature:.0f} C")
+
+    def _count_rest(self, seconds: float) -> None:
+        self._rested_s += seconds
 
     def detect(self, obj: str) -> str:
         """Look for an object (head, then body) and remember where it is; `BehaviourFailed` if not found."""

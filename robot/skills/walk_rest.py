@@ -22,6 +22,33 @@ REST_CHECK_S = 2.0
 MAX_REST_S = 900.0
 
 
+class StillHot(Exception):
+    """A servo did not cool below the mark in MAX_REST_S of rest (a fan, a load or a fault to look at)."""
+
+    def __init__(self, joint: str, temperature_c: float) -> None:
+        super().__init__(f"the {joint} servo is still at {temperature_c:.0f} C after {MAX_REST_S / 60:.0f} min of rest")
+        self.joint = joint
+        self.temperature_c = temperature_c
+
+
+def stand_until_cool(
+    heat: ServoHeat, cool_c: float, wait_sim: Callable[[float], None], rested: Callable[[float], None]
+) -> tuple[str, float]:
+    """Wait standing, REST_CHECK_S at a time (each handed to `rested`), until the hottest servo is below `cool_c`;
+    the hottest joint and its temperature then. `StillHot` after MAX_REST_S. Shared by the rest before a
+    behaviour's walk and the rest partway through one."""
+    joint, temperature = heat.hottest()
+    waited = 0.0
+    while temperature >= cool_c:
+        if waited >= MAX_REST_S:
+            raise StillHot(joint, temperature)
+        wait_sim(REST_CHECK_S)
+        waited += REST_CHECK_S
+        rested(REST_CHECK_S)
+        joint, temperature = heat.hottest()
+    return joint, temperature
+
+
 class ServoRest:
     """The navigator's `WalkRest` for hot servos. Each rest is published (`navigation/resting`, `navigation/rested`),
     and its simulated seconds handed to `rested` as they pass (a behaviour's step timeout does not count them)."""
@@ -53,14 +80,10 @@ class ServoRest:
             temperature_c=temperature,
         )
         started = self._now()
-        while temperature >= cool_c:
-            if self._now() - started >= MAX_REST_S:
-                raise NavigationFailed(
-                    f"the {joint} servo is still at {temperature:.0f} C after {MAX_REST_S / 60:.0f} min of rest"
-                )
-            self._wait_sim(REST_CHECK_S)
-            self._rested(REST_CHECK_S)
-            joint, temperature = self._heat.hottest()
+        try:
+            joint, temperature = stand_until_cool(self._heat, cool_c, self._wait_sim, self._rested)
+        except StillHot as hot:
+            raise NavigationFailed(str(hot)) from hot
         self._publish(
             "navigation/rested",
             f"rested {self._now() - started:.0f} s: the hottest servo is at {temperature:.0f} C",
