@@ -139,6 +139,9 @@ DEV: tuple[LanguageCase, ...] = (
     _e("near miss", "go to the charging doc", go(DOCK)),
     _e("near miss", "fetch the watter bottle", fetch(BOTTLE)),
     _e("near miss", "go to the livingroom table", go(TABLE)),
+    # heard at stop 79 (whisper on the heldout5 voices): a number that sounds like a little word
+    _e("near miss", "wait for seconds", wait("4")),
+    _e("near miss", "wait to seconds", wait("2")),
     # other words for the actions
     _e("action synonym", "collect the cup from the counter", fetch(MUG)),
     _e("action synonym", "hunt for the apple", find(APPLE)),
@@ -509,6 +512,8 @@ DEV: tuple[LanguageCase, ...] = (
     _e("action synonym", "What's around you right now?", LOOK_AND_TELL),
     _e("action synonym", "Have a quick look around", LOOK),
     _e("action synonym", "Look around the room please", LOOK),
+    _e("action synonym", "look all around you", LOOK),
+    _e("action synonym", "Look all round the kitchen", LOOK),
     _e("action synonym", "Go back home now", HOME),
     _e("polite", "Please return to where you started", HOME),
     _e("action synonym", "Head home please", HOME),

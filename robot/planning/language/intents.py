@@ -162,7 +162,7 @@ _ROOMS = phrases(
 )
 _LOOK = (
     rf"(?:(?:have|take) a (?:quick |little |good |short )?)?(?:{verbs('look', 'glance', 'peek')})"
-    rf"(?: (?:around|round|about))(?: {_ROOMS})?|"
+    rf"(?: all)?(?: (?:around|round|about))(?: {_ROOMS})?(?: everywhere)?|"
     rf"scan (?:around|your surroundings|{_ROOMS})|check (?:your|the) surroundings|"
     rf"survey (?:your surroundings|{_ROOMS})|have a look round"
 )
@@ -213,8 +213,11 @@ def _carry(m: re.Match[str], clause: Clause) -> Step:
     return Step("carry", thing=m.group("thing"), source=m.groupdict().get("source"), place=m.group("place"))
 
 
+_SOUNDS_LIKE_A_NUMBER = {"for": "four", "to": "two", "too": "two"}
+
+
 def _wait(m: re.Match[str], clause: Clause) -> Step:
-    amount = _number(m.group("n"))
+    amount = _number(_SOUNDS_LIKE_A_NUMBER.get(m.group("n"), m.group("n")))
     if amount is None:
         raise PlanningError(f"how long is {m.group('n')!r}? say a number of seconds, e.g. 'wait 5 seconds'")
     per_unit = 60.0 if (m.group("unit") or "").startswith("min") else 1.0
@@ -249,6 +252,8 @@ def _shapes() -> tuple[tuple[re.Pattern[str], Build], ...]:
             rf"(?P<n>{_NUMBER})(?: ?(?P<unit>seconds?|secs?|s|minutes?|mins?))?",
             _wait,
         ),
+        # "wait four seconds" as a recogniser often writes it: a number that sounds like "for", "to" or "too"
+        (rf"{wait_verbs} (?:for )?(?P<n>for|to|too) (?P<unit>seconds|minutes)", _wait),
         (_CHARGE, lambda m, c: Step("go", place="charger")),
         # a walk named by a noun: "take a walk to the kitchen", "make your way to the dock"
         (
