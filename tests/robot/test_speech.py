@@ -330,6 +330,21 @@ def test_a_stop_heard_as_the_recognisers_second_wording_is_still_a_stop() -> Non
     assert not transcript_is_stop(heard("Go to the top.", "Go to the stop."))
 
 
+def test_a_stop_after_one_word_whisper_did_not_catch_is_a_stop_but_dont_stop_and_say_stop_are_not() -> None:
+    """Whisper wrote "hey stop" in two voices of the fifth held-out set as "He's top.", "Nice stop!" and "High
+    stop!" with no stop among its other wordings."""
+    from robot.speech.asr import Transcript
+    from robot.speech.stop_word import transcript_is_stop
+
+    def heard(text: str) -> Transcript:
+        return Transcript(text, 0.5, "whisper", False, 1.0, 0.1, ())
+
+    for text in ("He's top.", "Nice stop!", "High stop!", "Whoa, halt!", "Okay freeze."):
+        assert transcript_is_stop(heard(text)), text
+    for text in ("Don't stop!", "Never stop.", "Say stop.", "Then stop.", "Bus stop.", "Go to the top."):
+        assert not transcript_is_stop(heard(text)), text
+
+
 def test_a_transcript_ending_in_a_stop_clause_is_a_stop_and_a_command_that_stops_somewhere_is_not() -> None:
     from robot.speech.asr import Transcript
     from robot.speech.stop_word import transcript_is_stop
