@@ -365,7 +365,7 @@ COMMAND_KINDS = ("command", "with_stop")  # utterances with a plan to give
 
 
 def run_speech(
-    sets: tuple[str, ...] = ("dev", "heldout", "heldout2", "heldout3", "heldout4"),
+    sets: tuple[str, ...] = ("dev", "heldout", "heldout2", "heldout3", "heldout4", "heldout5", "heldout6", "heldout7"),
     engines: tuple[str, ...] = ("whisper", "pocketsphinx"),
     robot_microphone: bool = True,
     quick: bool = False,

@@ -575,7 +575,81 @@ HELDOUT6 = SpokenSet(
     ),
 )
 
-SETS: dict[str, SpokenSet] = {s.name: s for s in (DEV, HELDOUT, HELDOUT2, HELDOUT3, HELDOUT4, HELDOUT5, HELDOUT6)}
+# An eighth set, written at stop 79 after `HELDOUT6`'s misses were read (its stop misses turned into a rule) and before
+# any engine heard this one: those rules measured on voices and wordings they were not made on.
+HELDOUT7 = SpokenSet(
+    name="heldout7",
+    voices=(
+        Voice("en-us+max", 155),
+        Voice("en-gb-scotland+anika", 165, 60),
+        Voice("en-gb-x-gbcwmd+zac", 150, 45),
+        Voice("en-us+shelby", 170, 55),
+    ),
+    commands=(
+        Case("please fetch the blue bottle", fetch(BOTTLE)),
+        Case("could I get the red mug", fetch(MUG)),
+        Case("go stand by the counter", go(COUNTER)),
+        Case("walk to the living room", go(TABLE)),
+        Case("go dock yourself", go(DOCK)),
+        Case("move the apple to the counter", carry(APPLE, COUNTER)),
+        Case("bring the mug to the charger", carry(MUG, DOCK)),
+        Case("leave the bottle on the table", carry(BOTTLE, TABLE)),
+        Case("do you know where the apple is", find(APPLE)),
+        Case("locate the blue bottle", find(BOTTLE)),
+        Case("look about the room", LOOK),
+        Case("tell me what is around you", LOOK_AND_TELL),
+        Case("return to your starting position", HOME),
+        Case("go home please", HOME),
+        Case("take the mug and put it by the dock", carry(MUG, DOCK)),
+        Case("first go to the table, then go to the counter", seq(go(TABLE), go(COUNTER))),
+        Case("say good night", say("good night")),
+        Case("announce that the robot is charging", say("the robot is charging")),
+        Case("wait six seconds", wait("6")),
+        Case("hold still for three seconds", wait("3")),
+        Case("hello robot, please get me the apple", fetch(APPLE)),
+        Case("I'm thirsty, get me the bottle", fetch(BOTTLE)),
+        Case("put it on the counter please", carry(MUG, COUNTER, held=True), held=MUG),
+        Case("bring it to me", fetch(APPLE), history=(("where is the green apple", find(APPLE)),)),
+        Case("the red mug, bring it to the table", carry(MUG, TABLE)),
+        Case("go over to the kitchen please", go(COUNTER)),
+        Case("look for the green apple", find(APPLE)),
+        Case("look around and then fetch the mug", seq(LOOK, fetch(MUG))),
+    ),
+    stops=(
+        "stop",
+        "stop now please",
+        "halt",
+        "freeze right now",
+        "robot, stop now",
+        "hey, halt",
+        "emergency stop right now",
+        "okay robot, stop",
+        "stop, stop, stop",
+        "please stop it",
+        "freeze, robot",
+        "stop the robot please",
+    ),
+    with_stop=(
+        Case("go to the table and stop in front of it", go(TABLE)),
+        Case("walk to the counter and stop there", go(COUNTER)),
+        Case("get me the apple and do not stop", fetch(APPLE)),
+        Case("bring the bottle over without stopping", fetch(BOTTLE)),
+    ),
+    out_of_world=(
+        "bring me a towel",
+        "go to the bedroom",
+        "turn off the lights",
+        "walk the dog",
+        "put the mug in the microwave",
+        "make the bed",
+        "call a taxi",
+        "do a backflip",
+    ),
+)
+
+SETS: dict[str, SpokenSet] = {
+    s.name: s for s in (DEV, HELDOUT, HELDOUT2, HELDOUT3, HELDOUT4, HELDOUT5, HELDOUT6, HELDOUT7)
+}
 
 
 ROOM_SNR_DB = 40.0  # a quiet room

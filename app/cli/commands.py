@@ -569,8 +569,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     bench.add_argument(
         "--sets",
-        default="dev,heldout,heldout2,heldout3,heldout4",
-        help="speech: spoken sets (dev, heldout, heldout2, heldout3, heldout4), comma-separated",
+        default="dev,heldout,heldout2,heldout3,heldout4,heldout5,heldout6,heldout7",
+        help="speech: spoken sets (dev, heldout, heldout2 ... heldout7), comma-separated",
     )
     bench.add_argument(
         "--whisper-model",

@@ -30,6 +30,15 @@ from pathlib import Path
 
 import numpy as np
 
+from robot.planning.language.lexicon import (
+    CLAUSE_VERBS,
+    HAND_VERBS,
+    OBJECT_WORDS,
+    OTHER_ROOMS,
+    PLACE_WORDS,
+    ROOM_WORDS,
+    word_list,
+)
 from robot.planning.world_context import normalize
 from robot.speech.asr import Transcript
 from robot.speech.audio import Audio
@@ -103,13 +112,47 @@ def two_words_stop(text: str) -> bool:
     return bool(match) and match.group("first") not in _NOT_A_STOP_BEFORE
 
 
+# Whisper hears the "now" after a stop in an unusual voice as another short word or two: "Stop the robot out.",
+# "Ok, stop the house.", "Stop right to help." (the sixth and seventh spoken sets, stop 79). A stop phrase first, then
+# at most MAX_TAIL_WORDS words that ask for nothing (no action, thing, place, or where or when: "stop at the dock",
+# "stop when you get there" stay commands) is a stop.
+MAX_TAIL_WORDS = 3
+_LEADING_STOP = re.compile(
+    rf"^(?:{_BEFORE} )*(?:{'|'.join(STOP_PHRASES)})(?: (?:stop|halt|freeze))*(?: {_AFTER})*(?P<tail>(?: [a-z]+)+)$"
+)
+_ASKS_FOR_SOMETHING = frozenset(
+    word
+    for phrase in (
+        *CLAUSE_VERBS,
+        *HAND_VERBS,
+        *(w for kinds in (OBJECT_WORDS, PLACE_WORDS, ROOM_WORDS) for names in kinds.values() for w in names),
+        *OTHER_ROOMS,
+        *word_list("""at, by, next, near, beside, in, on, onto, into, front, behind, past, when, once, after, before,
+                      until, till, with, without, and, but, if, unless, then, for, from, don t, dont, never, not,
+                      no, doing, walking, looking, going, talking, moving, turning"""),
+    )
+    for word in phrase.split()
+)
+
+
+def stop_with_a_misheard_tail(text: str) -> bool:
+    """A stop phrase, then a few words that ask for nothing ("stop the robot out" for "stop the robot now")."""
+    match = _LEADING_STOP.match(" ".join(normalize(text).split()))
+    if not match:
+        return False
+    tail = match.group("tail").split()
+    return len(tail) <= MAX_TAIL_WORDS and not any(word in _ASKS_FOR_SOMETHING for word in tail)
+
+
 def transcript_is_stop(transcript: Transcript) -> bool:
     """The transcript, or one of the other wordings the recogniser heard nearly as likely, is a stop utterance or
     ends with one. Whisper hears a spoken stop in an unusual voice as "Head stop!" with "Hey, stop!" next, or
     "Immersion should stop right now." with "Emergency stop right now." next: the other wordings added 5 of 96 stops
     on the development set and 6 on the first held-out set, and no false stop on their 512 ordinary commands."""
     wordings = (transcript.text, *transcript.alternatives)
-    return any(ends_with_stop(w) for w in wordings) or two_words_stop(transcript.text)
+    return any(ends_with_stop(w) for w in wordings) or any(
+        two_words_stop(w) or stop_with_a_misheard_tail(w) for w in wordings[:1]
+    )
 
 
 @dataclass(frozen=True)

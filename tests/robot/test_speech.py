@@ -345,6 +345,29 @@ def test_a_stop_after_one_word_whisper_did_not_catch_is_a_stop_but_dont_stop_and
         assert not transcript_is_stop(heard(text)), text
 
 
+def test_a_stop_whose_last_words_were_misheard_is_a_stop_but_a_stop_somewhere_or_doing_something_is_not() -> None:
+    """Whisper heard "stop the robot now" as "Stop the robot out." and "okay, stop now" as "Ok, stop the house."."""
+    from robot.speech.asr import Transcript
+    from robot.speech.stop_word import transcript_is_stop
+
+    def heard(text: str) -> Transcript:
+        return Transcript(text, 0.5, "whisper", False, 1.0, 0.1, ())
+
+    for text in ("Stop the robot out.", "Ok, stop the house.", "Stop right to help.", "Stop! The robot's out."):
+        assert transcript_is_stop(heard(text)), text
+    for text in (
+        "Stop at the dock.",
+        "Stop by the counter.",
+        "Stop when you get there.",
+        "Stop and go to the table.",
+        "Stop looking for the mug.",
+        "Stop to pick up the bottle.",
+        "Stop, then bring me the apple and the mug.",
+        "Stop the robot out of the kitchen.",
+    ):
+        assert not transcript_is_stop(heard(text)), text
+
+
 def test_a_transcript_ending_in_a_stop_clause_is_a_stop_and_a_command_that_stops_somewhere_is_not() -> None:
     from robot.speech.asr import Transcript
     from robot.speech.stop_word import transcript_is_stop
