@@ -233,9 +233,8 @@ class BusStats:
     packets_in: int = 0
     replies: int = 0
     busy_s: float = 0.0  # wire time of everything sent both ways, at the bus's baud rate
-    reads_at: dict[int, int] = dataclasses.field(
-        default_factory=dict
-    )  # read requests by their first address (what was asked)
+    # read requests by their first address: what the master asked for
+    reads_at: dict[int, int] = dataclasses.field(default_factory=dict)
 
 
 class BusPlant(Protocol):
