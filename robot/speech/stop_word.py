@@ -63,6 +63,12 @@ def is_stop_utterance(text: str) -> bool:
     return bool(_STOP_UTTERANCE.match(" ".join(normalize(text).split())))
 
 
+# Whisper writes "halt" in an unusual voice as "Alt!" (the h dropped) or "Hold!" (the seventh spoken set, stop 80).
+# Either is a stop only as the whole utterance: "take the mug, hold it" asks the hands for something.
+_HALT_SOUNDALIKES = "alt|hold"
+_SOUNDALIKE_UTTERANCE = re.compile(rf"^(?:{_BEFORE} )*(?:{_HALT_SOUNDALIKES})(?: {_AFTER})*$")
+
+
 def ends_with_stop(text: str) -> bool:
     """The words are a stop utterance, or their last clause (after a comma or a sentence's end) is one: "Okay, move
     on, stop!" is someone saying stop after a few words the recogniser did not catch. A stop said last, as a clause of
@@ -75,7 +81,7 @@ def ends_with_stop(text: str) -> bool:
 
 # Whisper writes "hey stop" in an unusual voice as "Nice stop!", "High stop!" or "He's top." (the fifth held-out set,
 # stop 79): two words, the second a stop word (or "s top"), are a stop unless the first says not to stop.
-_TWO_WORDS_STOP = re.compile(r"^(?:(?P<first>[a-z]+) (?:stop|halt|freeze)|[a-z]+ s top)$")
+_TWO_WORDS_STOP = re.compile(rf"^(?:(?P<first>[a-z]+) (?:stop|halt|freeze|{_HALT_SOUNDALIKES})|[a-z]+ s top)$")
 _NOT_A_STOP_BEFORE = frozenset(
     word_list("""dont, never, not, non, then, and, to, can, will, would, bus, say, said, says, shout, tell, spell,
                  write, type, repeat, announce, yell, whisper, sing""")
@@ -83,8 +89,12 @@ _NOT_A_STOP_BEFORE = frozenset(
 
 
 def two_words_stop(text: str) -> bool:
-    """The whole utterance is one word and a stop word ("nice stop" for "hey stop"), not "don't stop" or "then stop"."""
-    match = _TWO_WORDS_STOP.match(" ".join(normalize(text).split()))
+    """The whole utterance is one word and a stop word ("nice stop" for "hey stop"), not "don't stop" or "then stop";
+    or it is a word that sounds like "halt" alone ("Alt!", "Hey, hold!")."""
+    words = " ".join(normalize(text).split())
+    if _SOUNDALIKE_UTTERANCE.match(words):
+        return True
+    match = _TWO_WORDS_STOP.match(words)
     return bool(match) and match.group("first") not in _NOT_A_STOP_BEFORE
 
 
@@ -105,7 +115,7 @@ _ASKS_FOR_SOMETHING = frozenset(
         *OTHER_ROOMS,
         *word_list("""at, by, next, near, beside, in, on, onto, into, front, behind, past, when, once, after, before,
                       until, till, with, without, and, but, if, unless, then, for, from, don t, dont, never, not,
-                      no, doing, walking, looking, going, talking, moving, turning"""),
+                      doing, walking, looking, going, talking, moving, turning"""),
     )
     for word in phrase.split()
 )
@@ -120,16 +130,40 @@ def stop_with_a_misheard_tail(text: str) -> bool:
     return len(tail) <= MAX_TAIL_WORDS and not any(word in _ASKS_FOR_SOMETHING for word in tail)
 
 
+# Whisper hears "emergency" in an unusual voice as a word or two of its own: "Immersion seat stop right now." (the
+# seventh spoken set, stop 80). At most MAX_HEAD_WORDS words that ask for nothing and do not turn the stop into
+# something else ("don't", "then", "say", "bus"), then a stop phrase and the words people add, is a stop.
+MAX_HEAD_WORDS = 3
+_TRAILING_STOP = re.compile(
+    rf"^(?P<head>(?:[a-z]+ )+)(?:{'|'.join(STOP_PHRASES)})(?: (?:stop|halt|freeze))*(?: {_AFTER})*$"
+)
+
+
+def stop_with_a_misheard_head(text: str) -> bool:
+    """A few words that ask for nothing, then a stop phrase ending the utterance ("immersion seat stop right now")."""
+    match = _TRAILING_STOP.match(" ".join(normalize(text).split()))
+    if not match:
+        return False
+    head = match.group("head").split()
+    return len(head) <= MAX_HEAD_WORDS and not any(
+        word in _ASKS_FOR_SOMETHING or word in _NOT_A_STOP_BEFORE for word in head
+    )
+
+
 def transcript_is_stop(transcript: Transcript) -> bool:
     """The transcript, or one of the other wordings the recogniser heard nearly as likely, is a stop utterance or
     ends with one; or the transcript is a stop with its first or last words misheard (`two_words_stop`,
-    `stop_with_a_misheard_tail`). Whisper hears a spoken stop in an unusual voice as "Head stop!" with "Hey, stop!"
-    next, or "Immersion should stop right now." with "Emergency stop right now." next: the other wordings added 5 of
-    96 stops on the development set and 6 on the first held-out set, and no false stop on their 512 ordinary
-    commands."""
+    `stop_with_a_misheard_tail`, `stop_with_a_misheard_head`). Whisper hears a spoken stop in an unusual voice as
+    "Head stop!" with "Hey, stop!" next, or "Immersion should stop right now." with "Emergency stop right now." next:
+    the other wordings added 5 of 96 stops on the development set and 6 on the first held-out set, and no false stop
+    on their 512 ordinary commands."""
     if any(ends_with_stop(wording) for wording in (transcript.text, *transcript.alternatives)):
         return True
-    return two_words_stop(transcript.text) or stop_with_a_misheard_tail(transcript.text)
+    return (
+        two_words_stop(transcript.text)
+        or stop_with_a_misheard_tail(transcript.text)
+        or stop_with_a_misheard_head(transcript.text)
+    )
 
 
 @dataclass(frozen=True)

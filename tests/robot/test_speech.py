@@ -368,6 +368,41 @@ def test_a_stop_whose_last_words_were_misheard_is_a_stop_but_a_stop_somewhere_or
         assert not transcript_is_stop(heard(text)), text
 
 
+def test_a_stop_whose_first_words_were_misheard_or_a_halt_heard_as_alt_is_a_stop_but_a_command_is_not() -> None:
+    """Whisper heard "emergency stop right now" as "Immersion seat stop right now.", "stop now please" as "Stop! No,
+    please!" and "halt" as "Alt!" or "Hold!" in the seventh spoken set's voices."""
+    from robot.speech.asr import Transcript
+    from robot.speech.stop_word import transcript_is_stop
+
+    def heard(text: str) -> Transcript:
+        return Transcript(text, 0.5, "whisper", False, 1.0, 0.1, ())
+
+    for text in (
+        "Immersion seat stop right now.",
+        "Just stop.",
+        "Stop! No, please!",
+        "Stop, no robot, please!",
+        "Alt!",
+        "Hey, Alt!",
+        "Head, hold!",
+        "Hold it right there.",
+    ):
+        assert transcript_is_stop(heard(text)), text
+    for text in (
+        "Don't stop now.",
+        "I said stop.",
+        "Then you just stop right now.",
+        "The red mug stop.",
+        "Go to the dock and stop.",
+        "Take the mug, hold it.",
+        "Hold the mug.",
+        "Hold still for three seconds.",
+        "Hold on to the bottle.",
+        "Bus stop please.",
+    ):
+        assert not transcript_is_stop(heard(text)), text
+
+
 def test_a_transcript_ending_in_a_stop_clause_is_a_stop_and_a_command_that_stops_somewhere_is_not() -> None:
     from robot.speech.asr import Transcript
     from robot.speech.stop_word import transcript_is_stop
