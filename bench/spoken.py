@@ -31,7 +31,7 @@ from robot.planning.heard import first_readable
 from robot.planning.pipeline import PlannerConfig, build_pipeline
 from robot.planning.planner import ClarificationNeeded, PlanningError
 from robot.planning.world_context import WorldContext, normalize
-from robot.speech.asr import SpeechRecognizer
+from robot.speech.asr import AUTO_RUN_CONFIDENCE, SpeechRecognizer
 from robot.speech.audio import RATE, Audio, add_noise
 from robot.speech.devices import AudioDevice
 from robot.speech.engines import build_recognizer
@@ -230,12 +230,16 @@ def _group(selected: list[Heard]) -> dict[str, Any]:
 
 def _out_of_world(selected: list[Heard]) -> dict[str, Any]:
     """Requests for what is not in the world or not an ability: refused, asked about (a plan of another wording,
-    waiting for the operator), or planned as heard (acted on: wrong)."""
+    waiting for the operator), or planned as heard (wrong: the page shows it for Send); and of those planned as heard,
+    the ones sure enough to run unasked when the operator lets sure transcripts run (the worst case: acted on)."""
     return {
         "utterances": len(selected),
         "refused": _rate([not r.planned for r in selected]),
         "asked_about": _rate([r.planned and r.asked for r in selected]),
         "planned_as_heard": _rate([r.planned and not r.asked for r in selected]),
+        "would_run_unasked": _rate(
+            [r.planned and not r.asked and r.confidence >= AUTO_RUN_CONFIDENCE for r in selected]
+        ),
     }
 
 
@@ -273,7 +277,6 @@ def _stops(mine: list[Heard]) -> dict[str, Any]:
 
 def _confidence(mine: list[Heard]) -> dict[str, Any]:
     """Whether "run when sure" can be trusted: of the transcripts sure enough to run unasked, how many were right."""
-    from robot.speech.asr import AUTO_RUN_CONFIDENCE
 
     commands = [r for r in mine if r.kind in COMMAND_KINDS and r.plan_right is not None]
     sure = [r for r in commands if r.confidence >= AUTO_RUN_CONFIDENCE and r.planned and not r.asked]
@@ -365,7 +368,7 @@ COMMAND_KINDS = ("command", "with_stop")  # utterances with a plan to give
 
 
 def run_speech(
-    sets: tuple[str, ...] = ("dev", "heldout", "heldout2", "heldout3", "heldout4", "heldout5", "heldout6", "heldout7"),
+    sets: tuple[str, ...] = tuple(SETS),
     engines: tuple[str, ...] = ("whisper", "pocketsphinx"),
     robot_microphone: bool = True,
     quick: bool = False,

@@ -144,6 +144,7 @@ def _transcribe_file(path: str, engine: str | None, seed: int, settings: Setting
         "audio_s": round(transcript.audio_s, 3),
         "decode_ms": round(transcript.decode_s * 1000, 1),
         "alternatives": list(transcript.alternatives),
+        "unsure_names": list(transcript.unsure_names),
         "stop_word": verdict.stop or transcript_is_stop(transcript),
     }
 
@@ -569,8 +570,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     bench.add_argument(
         "--sets",
-        default="dev,heldout,heldout2,heldout3,heldout4,heldout5,heldout6,heldout7",
-        help="speech: spoken sets (dev, heldout, heldout2 ... heldout7), comma-separated",
+        default="dev,heldout,heldout2,heldout3,heldout4,heldout5,heldout6,heldout7,heldout8",
+        help="speech: spoken sets (dev, heldout, heldout2 ... heldout8), comma-separated",
     )
     bench.add_argument(
         "--whisper-model",

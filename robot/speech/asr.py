@@ -27,6 +27,9 @@ class Transcript:
     # Other wordings the engine found nearly as likely, likeliest first (whisper's beam): the planner tries them,
     # and asks before running one, when it cannot read `text` ("grant me the bottle" for "grab me the bottle").
     alternatives: tuple[str, ...] = ()
+    # The world's names in `text` that the audio alone barely supports: the recogniser's hints put them there more
+    # than the speaker did ("Bring the apple." for "bring me a towel"). The transcript is then not sure.
+    unsure_names: tuple[str, ...] = ()
 
     @property
     def sure(self) -> bool:

@@ -297,6 +297,7 @@ class RobotVoice:
             "audio_s": round(transcript.audio_s, 3),
             "decode_ms": round(transcript.decode_s * 1000, 1),
             "alternatives": list(transcript.alternatives),
+            "unsure_names": list(transcript.unsure_names),
             "auto_run": transcript.sure,
             "will_run": will_run,
             "source": SOURCE,

@@ -17,6 +17,13 @@
     registerProcessor("recorder", Recorder);`;
   let context = null, source = null, node = null, stream = null, chunks = [], recording = false;
 
+  // the confidence, and why a transcript is not sure when the recogniser says why
+  function howSure(data) {
+    const form = data.in_grammar ? "" : ", not a known command form";
+    const names = (data.unsure_names || []).map((n) => `"${n}"`).join(", ");
+    return `confidence ${data.confidence.toFixed(2)}${form}${names ? `; ${names} may be a guess: check it` : ""}`;
+  }
+
   function heard(text, isError) {
     const el = $("heard");
     el.textContent = text;
@@ -26,7 +33,7 @@
   // The robot's own microphone: what it heard, run already when it was sure, else offered for confirmation.
   window.humanoid.onRobotHeard = (data) => {
     if (data.stop) return heard(`the robot heard a spoken stop ("${data.text}"): e-stop latched`, true);
-    const sure = `confidence ${data.confidence.toFixed(2)}${data.in_grammar ? "" : ", not a known command form"}`;
+    const sure = howSure(data);
     if (data.will_run) return heard(`the robot heard "${data.text}" (${sure}): running`, false);
     $("command-text").value = data.text;
     window.humanoid.heardAs = { text: data.text, alternatives: data.alternatives || [] };
@@ -89,7 +96,7 @@
     $("command-text").value = data.text;
     // the other wordings go with the command while its text is as heard: tried if the text cannot be planned
     window.humanoid.heardAs = { text: data.text, alternatives: data.alternatives || [] };
-    const sure = `confidence ${data.confidence.toFixed(2)}${data.in_grammar ? "" : ", not a known command form"}`;
+    const sure = howSure(data);
     if (data.auto_run && $("auto-run").checked) {
       heard(`heard "${data.text}" (${sure}): running`, false);
       $("command-form").requestSubmit();

@@ -108,6 +108,24 @@ def test_a_misheard_command_is_asked_about_and_runs_once_approved(page) -> None:
     expect(page.locator("#command-result")).to_have_class("result error")
 
 
+def test_a_transcript_with_a_name_the_hints_may_have_put_there_waits_for_send_and_says_which(page) -> None:
+    """What the robot's microphone heard, not sure because whisper's hints may have supplied "apple" ("bring me a
+    towel" heard as "Bring the apple."): offered for Send, with the name to check."""
+    expect = playwright_api.expect
+    heard = {
+        "text": "Bring the apple.",
+        "confidence": 0.65,
+        "in_grammar": False,
+        "alternatives": [],
+        "unsure_names": ["apple"],
+        "will_run": False,
+    }
+    page.evaluate("heard => humanoid.onRobotHeard(heard)", heard)
+    expect(page.locator("#heard")).to_contain_text('"apple" may be a guess: check it')
+    expect(page.locator("#heard")).to_contain_text("press Send to run it")
+    expect(page.locator("#command-text")).to_have_value("Bring the apple.")
+
+
 def test_an_operator_approves_edits_and_pauses_plans_from_the_page(page) -> None:
     expect = playwright_api.expect
     expect(page.locator("#planner")).to_contain_text("planner: rules")

@@ -112,6 +112,8 @@ async def transcribe(request: Request, rt: RuntimeDep) -> dict[str, Any]:
         "decode_ms": round(transcript.decode_s * 1000, 1),
         # other wordings nearly as likely: sent with the command, tried when the text cannot be planned
         "alternatives": list(transcript.alternatives),
+        # the world's names the audio alone barely supports (the hints put them there): why it is not sure
+        "unsure_names": list(transcript.unsure_names),
         # the page runs it without asking when its operator allows that and the recogniser is this sure
         "auto_run": transcript.sure and latched is None,
         "stop_word": latched is not None,
