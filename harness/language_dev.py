@@ -513,6 +513,7 @@ DEV: tuple[LanguageCase, ...] = (
     _e("action synonym", "Have a quick look around", LOOK),
     _e("action synonym", "Look around the room please", LOOK),
     _e("action synonym", "look all around you", LOOK),
+    _e("action synonym", "Look at the green apple", find(APPLE)),
     _e("action synonym", "Look all round the kitchen", LOOK),
     _e("action synonym", "Go back home now", HOME),
     _e("polite", "Please return to where you started", HOME),
@@ -561,6 +562,7 @@ DEV: tuple[LanguageCase, ...] = (
     _e("manner", "take the apple to the table and don't stop for anything", carry(APPLE, TABLE)),
     # added at stop 60, from the two typed misses of the fifth spoken set (heldout4), measured first untouched
     _e("stop ending", "drive to the counter but stop right next to it", go(COUNTER)),
+    _e("stop ending", "walk to the dock and stop here", go(DOCK)),
     _e("manner", "bring me the apple and do not stop until you have it", fetch(APPLE)),
     _o("unknown object", "Bring me the newspaper"),
     _o("unknown object", "Pick up the keys"),

@@ -32,3 +32,11 @@ def test_a_wrong_plan_does_not_match() -> None:
     silent = [dict(step) for step in case.plan]
     silent[-1]["text"] = " "
     assert not plan_matches(case.plan, silent)
+
+
+def test_a_said_text_matches_however_it_is_spelt_aloud_but_not_other_words() -> None:
+    """The robot says "goodnight" and "good night" alike (whisper writes the one for the other)."""
+    expected = [{"action": "say", "text": "good night"}]
+    assert plan_matches(expected, [{"action": "say", "text": "Goodnight!"}])
+    assert plan_matches(expected, [{"action": "say", "text": "Good-night."}])
+    assert not plan_matches(expected, [{"action": "say", "text": "good light"}])

@@ -123,8 +123,8 @@ _STOP = (
     r"(?:stop|halt|freeze|stand still|stop moving|cancel|abort|emergency stop|e stop|stop what you are doing|"
     r"hold it|do not move|cancel that|stop that|cancel everything|stop everything|stop the robot|stop all|"
     r"never mind|forget it|forget about it)"
-    r"(?: (?:stop|halt|freeze|now|right now|immediately|please|at once|robot|right there|there|everything|"
-    r"moving|it|all))*"
+    r"(?: (?:stop|halt|freeze|now|right now|immediately|please|at once|robot|right there|there|right here|here|"
+    r"everything|moving|it|all))*"
 )
 # where or when a walk ends, said after it: "(go to the dock and) stop next to it", "stop once you get there"
 _STOP_AT_THE_END = (
@@ -290,6 +290,7 @@ def _shapes() -> tuple[tuple[re.Pattern[str], Build], ...]:
         # find
         (
             rf"{go_first}(?:{verbs(*FIND_VERBS)}(?: out| me| us)?|{verbs('look')} (?:around |about |everywhere )?for|"
+            rf"{verbs('look')} at|"
             rf"{verbs('search', 'check')}(?: (?:around|everywhere|{_ROOMS}))? for|"
             rf"{verbs('hunt')}(?: around)? for|(?:have|take) a look(?: around)? for|check for|"
             r"(?:look out|keep an eye out|keep a look out|watch out|watch) for|see if you can "
