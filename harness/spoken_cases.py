@@ -719,8 +719,80 @@ HELDOUT8 = SpokenSet(
     ),
 )
 
+# A tenth set, written at stop 80 after `HELDOUT8` was measured and before its misses were read: what was changed from
+# them, measured on voices and wordings it was not made on.
+HELDOUT9 = SpokenSet(
+    name="heldout9",
+    voices=(
+        Voice("en-gb-x-rp+adam", 160),
+        Voice("en-us+Alicia", 165, 60),
+        Voice("en-029+iven", 150, 45),
+        Voice("en-us-nyc+Andy", 170, 50),
+    ),
+    commands=(
+        Case("get me the green apple please", fetch(APPLE)),
+        Case("could you grab the red mug for me", fetch(MUG)),
+        Case("walk over to the dock", go(DOCK)),
+        Case("go to the kitchen", go(COUNTER)),
+        Case("head to the living room table", go(TABLE)),
+        Case("carry the mug to the counter", carry(MUG, COUNTER)),
+        Case("put the apple on the coffee table", carry(APPLE, TABLE)),
+        Case("take the bottle to the charging dock", carry(BOTTLE, DOCK)),
+        Case("where did the bottle go", find(BOTTLE)),
+        Case("search for the red mug", find(MUG)),
+        Case("look around please", LOOK),
+        Case("tell me what you see", LOOK_AND_TELL),
+        Case("go back home", HOME),
+        Case("go back to your start", HOME),
+        Case("grab the apple and put it on the counter", carry(APPLE, COUNTER)),
+        Case("go to the table and then to the dock", seq(go(TABLE), go(DOCK))),
+        Case("say good morning", say("good morning")),
+        Case("announce that lunch is ready", say("lunch is ready")),
+        Case("wait three seconds", wait("3")),
+        Case("wait here for eight seconds", wait("8")),
+        Case("excuse me, could you bring me the bottle", fetch(BOTTLE)),
+        Case("I want the red mug", fetch(MUG)),
+        Case("put it down on the table", carry(MUG, TABLE, held=True), held=MUG),
+        Case("bring it over here", fetch(BOTTLE), history=(("where is the blue bottle", find(BOTTLE)),)),
+        Case("the apple, take it to the dock", carry(APPLE, DOCK)),
+        Case("please go to the charger", go(DOCK)),
+        Case("try to find the green apple", find(APPLE)),
+        Case("look around, then bring me the bottle", seq(LOOK, fetch(BOTTLE))),
+    ),
+    stops=(
+        "stop",
+        "stop it",
+        "halt please",
+        "freeze",
+        "robot, freeze",
+        "hey robot, stop",
+        "emergency stop now",
+        "okay, halt",
+        "stop, please stop",
+        "stop right there",
+        "please halt now",
+        "stop everything",
+    ),
+    with_stop=(
+        Case("go to the table and stop next to it", go(TABLE)),
+        Case("walk to the kitchen and stop there", go(COUNTER)),
+        Case("bring me the bottle and don't stop", fetch(BOTTLE)),
+        Case("fetch the apple without stopping", fetch(APPLE)),
+    ),
+    out_of_world=(
+        "bring me a spoon",
+        "go to the office",
+        "turn on the tv",
+        "feed the cat",
+        "put the mug in the sink",
+        "fold the laundry",
+        "order a pizza",
+        "do a somersault",
+    ),
+)
+
 SETS: dict[str, SpokenSet] = {
-    s.name: s for s in (DEV, HELDOUT, HELDOUT2, HELDOUT3, HELDOUT4, HELDOUT5, HELDOUT6, HELDOUT7, HELDOUT8)
+    s.name: s for s in (DEV, HELDOUT, HELDOUT2, HELDOUT3, HELDOUT4, HELDOUT5, HELDOUT6, HELDOUT7, HELDOUT8, HELDOUT9)
 }
 
 
