@@ -52,8 +52,12 @@ KWS_THRESHOLDS = {"stop": 1e-40, "halt": 1e-35, "freeze": 1e-25, "robot stop": 1
 MAX_STOP_UTTERANCE_S = 3.5  # longer is no stop "with a few words" (with the quiet around it a recording keeps)
 _BEFORE = r"(?:hey|okay|ok|robot|please|now)"
 # "stop the robot", "stop right there", "halt right away": every voice of the fifth spoken set said "stop the robot"
-# and no recogniser's wording of it was taken as a stop (stop 60)
-_AFTER = r"(?:now|right now|please|it|everything|moving|robot|the robot|then|there|right there|right away|immediately)"
+# and no recogniser's wording of it was taken as a stop (stop 60). "right" alone: whisper splits "stop right away" as
+# "Stop right, I'm weird." (the ninth spoken set, stop 80), leaving three words of tail
+_AFTER = (
+    r"(?:now|right now|please|it|everything|moving|robot|the robot|then|there|right there|right away|immediately|"
+    r"right)"
+)
 _CLAUSE_BREAK = re.compile(r"[,;:.!?]+")
 _STOP_UTTERANCE = re.compile(rf"^(?:{_BEFORE} )*(?:{'|'.join(STOP_PHRASES)})(?: (?:stop|halt|freeze))*(?: {_AFTER})*$")
 

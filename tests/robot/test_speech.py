@@ -370,7 +370,13 @@ def test_a_stop_whose_last_words_were_misheard_is_a_stop_but_a_stop_somewhere_or
     def heard(text: str) -> Transcript:
         return Transcript(text, 0.5, "whisper", False, 1.0, 0.1, ())
 
-    for text in ("Stop the robot out.", "Ok, stop the house.", "Stop right to help.", "Stop! The robot's out."):
+    for text in (
+        "Stop the robot out.",
+        "Ok, stop the house.",
+        "Stop right to help.",
+        "Stop! The robot's out.",
+        "Stop right, I'm weird.",  # "stop right away"
+    ):
         assert transcript_is_stop(heard(text)), text
     for text in (
         "Stop at the dock.",
@@ -381,6 +387,8 @@ def test_a_stop_whose_last_words_were_misheard_is_a_stop_but_a_stop_somewhere_or
         "Stop to pick up the bottle.",
         "Stop, then bring me the apple and the mug.",
         "Stop the robot out of the kitchen.",
+        "Stop right at the dock.",
+        "Stop right, then go to the table.",
     ):
         assert not transcript_is_stop(heard(text)), text
 
