@@ -67,9 +67,9 @@ def is_stop_utterance(text: str) -> bool:
     return bool(_STOP_UTTERANCE.match(" ".join(normalize(text).split())))
 
 
-# Whisper writes "halt" in an unusual voice as "Alt!" (the h dropped) or "Hold!" (the seventh spoken set, stop 80).
-# Either is a stop only as the whole utterance: "take the mug, hold it" asks the hands for something.
-_HALT_SOUNDALIKES = "alt|hold"
+# Whisper writes "halt" in an unusual voice as "Alt!" (the h dropped), "Hold!" or "Out!" (the seventh and tenth spoken
+# sets, stop 80). Each is a stop only as the whole utterance: "take the mug, hold it" asks the hands for something.
+_HALT_SOUNDALIKES = "alt|hold|out"
 _SOUNDALIKE_UTTERANCE = re.compile(rf"^(?:{_BEFORE} )*(?:{_HALT_SOUNDALIKES})(?: {_AFTER})*$")
 
 
@@ -85,7 +85,7 @@ def ends_with_stop(text: str) -> bool:
 
 # Whisper writes "hey stop" in an unusual voice as "Nice stop!", "High stop!" or "He's top." (the fifth held-out set,
 # stop 79): two words, the second a stop word (or "s top"), are a stop unless the first says not to stop.
-_TWO_WORDS_STOP = re.compile(rf"^(?:(?P<first>[a-z]+) (?:stop|halt|freeze|{_HALT_SOUNDALIKES})|[a-z]+ s top)$")
+_TWO_WORDS_STOP = re.compile(r"^(?:(?P<first>[a-z]+) (?:stop|halt|freeze|alt|hold)|[a-z]+ s top)$")  # not "go out"
 _NOT_A_STOP_BEFORE = frozenset(
     word_list("""dont, never, not, non, then, and, to, can, will, would, bus, say, said, says, shout, tell, spell,
                  write, type, repeat, announce, yell, whisper, sing""")

@@ -411,6 +411,8 @@ def test_a_stop_whose_first_words_were_misheard_or_a_halt_heard_as_alt_is_a_stop
         "Hey, Alt!",
         "Head, hold!",
         "Hold it right there.",
+        "Okay, out!",
+        "Out please!",
     ):
         assert transcript_is_stop(heard(text)), text
     for text in (
@@ -423,6 +425,10 @@ def test_a_stop_whose_first_words_were_misheard_or_a_halt_heard_as_alt_is_a_stop
         "Hold the mug.",
         "Hold still for three seconds.",
         "Hold on to the bottle.",
+        "Get out of the kitchen.",
+        "Go out.",
+        "Watch out!",
+        "Out of the way.",
         "Bus stop please.",
     ):
         assert not transcript_is_stop(heard(text)), text
