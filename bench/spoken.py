@@ -240,6 +240,12 @@ def _out_of_world(selected: list[Heard]) -> dict[str, Any]:
         "would_run_unasked": _rate(
             [r.planned and not r.asked and r.confidence >= AUTO_RUN_CONFIDENCE for r in selected]
         ),
+        "planned_heard": [
+            f"{r.text} ({r.voice}, {_condition(r)}): {r.heard!r}, confidence {r.confidence:.2f}"
+            + (", asked first" if r.asked else "")
+            for r in selected
+            if r.planned
+        ],
     }
 
 
@@ -266,13 +272,19 @@ def _stops(mine: list[Heard]) -> dict[str, Any]:
             r.spotted_stop or r.transcript_stop for r in ordinary if r.kind == "with_stop"
         ),
         "missed": sorted(
-            {
-                f"{r.text} ({r.voice}, {'clean' if r.snr_db is None else 'noisy'})"
-                for r in stops
-                if not (r.spotted_stop or r.transcript_stop)
-            }
+            {f"{r.text} ({r.voice}, {_condition(r)})" for r in stops if not (r.spotted_stop or r.transcript_stop)}
         ),
+        # which stage took an ordinary utterance for a stop: the spotter (with the grammar) or the transcript's words
+        "false_stops_heard": [
+            f"{r.text} ({r.voice}, {_condition(r)}): {'spotter' if r.spotted_stop else 'transcript'}, {r.heard!r}"
+            for r in ordinary
+            if r.spotted_stop or r.transcript_stop
+        ],
     }
+
+
+def _condition(r: Heard) -> str:
+    return "clean" if r.snr_db is None else "noisy"
 
 
 def _confidence(mine: list[Heard]) -> dict[str, Any]:

@@ -36,7 +36,10 @@ def test_the_speech_bench_reports_word_errors_plans_and_stops_per_engine_and_tim
         assert figures["stop"]["stop_utterances"] == 1 and figures["stop"]["ordinary_commands"] == 3
         assert figures["out_of_world"]["utterances"] == 1
         assert figures["confidence"]["threshold"] == 0.7
-    assert result["sets"]["dev"]["whisper"]["stop"]["false_stops"] == 0  # "go to the dock and stop there": no stop
+    whisper = result["sets"]["dev"]["whisper"]
+    assert whisper["stop"]["false_stops"] == 0 and whisper["stop"]["false_stops_heard"] == []  # "... stop there"
+    away = whisper["out_of_world"]  # "bring me a beer": refused, or listed with what was heard, and never run unasked
+    assert away["would_run_unasked"] == 0.0 and len(away["planned_heard"]) == round(1 - away["refused"]), away
     stops = result["robot_microphone_stop"]
     assert stops["latched"] == 2 and stops["missed"] == [], stops
     latency = stops["end_of_word_to_estop_ms"]
