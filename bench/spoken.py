@@ -289,7 +289,6 @@ def _condition(r: Heard) -> str:
 
 def _confidence(mine: list[Heard]) -> dict[str, Any]:
     """Whether "run when sure" can be trusted: of the transcripts sure enough to run unasked, how many were right."""
-
     commands = [r for r in mine if r.kind in COMMAND_KINDS and r.plan_right is not None]
     sure = [r for r in commands if r.confidence >= AUTO_RUN_CONFIDENCE and r.planned and not r.asked]
     return {

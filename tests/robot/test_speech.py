@@ -202,7 +202,7 @@ def test_a_name_whispers_hints_put_in_place_of_what_was_said_is_not_sure_enough_
     from harness.spoken_cases import Voice, utterance
     from robot.speech.whisper import UNSURE_NAME_CONFIDENCE
 
-    # recordings of the speech bench's (development set, clean, seeds 363 and 353)
+    # recordings of the speech bench's, clean (the development set's seed 363, the seventh held-out set's 353)
     book = whisper.transcribe(utterance("pick up the book", Voice("en-gb", 175), None, 363))
     assert "mug" in book.text.lower() and book.unsure_names == ("mug",), book
     assert not book.sure and book.confidence <= UNSURE_NAME_CONFIDENCE, book
