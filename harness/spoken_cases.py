@@ -862,9 +862,93 @@ HELDOUT10 = SpokenSet(
     ),
 )
 
+# written at stop 81, before any engine heard it and before any change of that stop was measured
+HELDOUT11 = SpokenSet(
+    name="heldout11",
+    voices=(
+        Voice("en-us+quincy", 160),
+        Voice("en-gb-x-rp+Andrea", 165, 60),
+        Voice("en-gb-x-gbcwmd+norbert", 155, 45),
+        Voice("en-us-nyc+Gene", 170),
+    ),
+    commands=(
+        Case("can you grab the apple for me", fetch(APPLE)),
+        Case("i need the water bottle", fetch(BOTTLE)),
+        Case("head over to the dock", go(DOCK)),
+        Case("please walk to the kitchen counter", go(COUNTER)),
+        Case("make your way to the coffee table", go(TABLE)),
+        Case("carry the mug to the counter", carry(MUG, COUNTER)),
+        Case("set the apple down on the table", carry(APPLE, TABLE)),
+        Case("move the bottle to the living room", carry(BOTTLE, TABLE)),
+        Case("have you seen the red mug", find(MUG)),
+        Case("search for the apple", find(APPLE)),
+        Case("take a look around", LOOK),
+        Case("tell me what you can see", LOOK_AND_TELL),
+        Case("go back home", HOME),
+        Case("return to your starting position", HOME),
+        Case("grab the mug and put it on the counter", carry(MUG, COUNTER)),
+        Case("go to the table and then come back home", seq(go(TABLE), HOME)),
+        Case("say hello there", say("hello there")),
+        Case("tell everyone that dinner is served", say("dinner is served")),
+        Case("wait three seconds", wait("3")),
+        Case("hold on for four seconds", wait("4")),
+        Case("robot, bring me the blue bottle please", fetch(BOTTLE)),
+        Case("could i have the green apple", fetch(APPLE)),
+        Case("drop it on the table", carry(MUG, TABLE, held=True), held=MUG),
+        Case("bring it here", fetch(BOTTLE), history=(("find the bottle", find(BOTTLE)),)),
+        Case("the apple, take it to the counter", carry(APPLE, COUNTER)),
+        Case("go to the kitchen", go(COUNTER)),
+        Case("find me the coffee mug", find(MUG)),
+        Case("look around and then head to the dock", seq(LOOK, go(DOCK))),
+    ),
+    stops=(
+        "stop",
+        "stop right now",
+        "halt",
+        "freeze",
+        "robot stop",
+        "okay, halt",
+        "emergency stop",
+        "stop, please",
+        "freeze, freeze",
+        "stop it now",
+        "hey robot, stop",
+        "halt right there",
+    ),
+    with_stop=(
+        Case("go to the dock and stop", go(DOCK)),
+        Case("walk to the table and stop next to it", go(TABLE)),
+        Case("fetch the bottle without a stop", fetch(BOTTLE)),
+        Case("keep going to the counter, don't stop", go(COUNTER)),
+    ),
+    out_of_world=(
+        "bring me the newspaper",
+        "go to the basement",
+        "turn on the lights",
+        "feed the dog",
+        "put the apple in the oven",
+        "vacuum the carpet",
+        "call my brother",
+        "jump over the chair",
+    ),
+)
+
 SETS: dict[str, SpokenSet] = {
     s.name: s
-    for s in (DEV, HELDOUT, HELDOUT2, HELDOUT3, HELDOUT4, HELDOUT5, HELDOUT6, HELDOUT7, HELDOUT8, HELDOUT9, HELDOUT10)
+    for s in (
+        DEV,
+        HELDOUT,
+        HELDOUT2,
+        HELDOUT3,
+        HELDOUT4,
+        HELDOUT5,
+        HELDOUT6,
+        HELDOUT7,
+        HELDOUT8,
+        HELDOUT9,
+        HELDOUT10,
+        HELDOUT11,
+    )
 }
 
 

@@ -54,6 +54,23 @@ def grammar_decoder(grammar: Grammar, **options: Any) -> Any:
         return pocketsphinx.Decoder(jsgf=str(path), beam=1e-80, wbeam=1e-60, pbeam=1e-80, **options)
 
 
+def phone_loop_decoder(**options: Any) -> Any:
+    """A pocketsphinx decoder over a free loop of English phones: how well any speech can be explained, against
+    which a grammar sentence's fit is measured."""
+    import pocketsphinx
+
+    model = Path(pocketsphinx.get_model_path()) / "en-us"
+    return pocketsphinx.Decoder(allphone=str(model / "en-us-phone.lm.bin"), lw=2.0, **options)
+
+
+def fit_per_s(score: float | None, loop_score: float | None, frames: int) -> float | None:
+    """How much better (above 0) or worse a sentence's path explains the sound than the phone loop's: the
+    log-likelihood ratio per second of audio (None without both paths)."""
+    if not score or not loop_score or frames <= 0:
+        return None
+    return math.log(score / loop_score) / (frames / FRAMES_PER_S)
+
+
 class PocketSphinxASR:
     name = "pocketsphinx"
 
@@ -72,7 +89,7 @@ class PocketSphinxASR:
         options = {"loglevel": "FATAL", "dither": False, "cmn": "batch", "bestpath": False}
         self._commands = grammar_decoder(self.grammar, **options)
         self._free = pocketsphinx.Decoder(**options) if free_speech else None
-        self._phones = pocketsphinx.Decoder(allphone=str(model / "en-us-phone.lm.bin"), lw=2.0, **options)
+        self._phones = phone_loop_decoder(**options)
         self._lock = threading.Lock()  # a decoder decodes one utterance at a time
 
     def command_sentence(self, audio: Audio) -> str:
@@ -125,7 +142,7 @@ def _decode(decoder, pcm: bytes, passes: int = 1) -> tuple[str, float | None, in
 
 
 def _confidence(score: float | None, loop_score: float | None, frames: int) -> float:
-    if not score or not loop_score or frames <= 0:
+    ratio_per_s = fit_per_s(score, loop_score, frames)
+    if ratio_per_s is None:
         return 0.0
-    ratio_per_s = math.log(score / loop_score) / (frames / FRAMES_PER_S)
     return min(1.0, max(0.0, 1.0 + (ratio_per_s - RATIO_AT_FULL) / RATIO_SPAN))
