@@ -63,10 +63,11 @@ STREAMED_FIT_FLOOR = -0.26
 _BEFORE = r"(?:hey|okay|ok|robot|please|now)"
 # "stop the robot", "stop right there", "halt right away": every voice of the fifth spoken set said "stop the robot"
 # and no recogniser's wording of it was taken as a stop (stop 60). "right" alone: whisper splits "stop right away" as
-# "Stop right, I'm weird." (the ninth spoken set, stop 80), leaving three words of tail
+# "Stop right, I'm weird." (the ninth spoken set, stop 80), leaving three words of tail. "(right) here": "halt right
+# there" heard as "Hold right here." (the twelfth set, stop 81)
 _AFTER = (
-    r"(?:now|right now|please|it|everything|moving|robot|the robot|then|there|right there|right away|immediately|"
-    r"right)"
+    r"(?:now|right now|please|it|everything|moving|robot|the robot|then|there|right there|here|right here|"
+    r"right away|immediately|right)"
 )
 _CLAUSE_BREAK = re.compile(r"[,;:.!?]+")
 _STOP_UTTERANCE = re.compile(rf"^(?:{_BEFORE} )*(?:{'|'.join(STOP_PHRASES)})(?: (?:stop|halt|freeze))*(?: {_AFTER})*$")

@@ -339,6 +339,7 @@ def test_a_transcript_is_a_stop_when_its_words_are_a_stop_phrase_with_a_few_more
         "Stop the robot.",
         "Stop right there!",
         "halt right away",
+        "Stop right here.",
     ):
         assert is_stop_utterance(text), text
     for text in (
@@ -433,9 +434,12 @@ def test_a_stop_whose_first_words_were_misheard_or_a_halt_heard_as_alt_is_a_stop
         "Hold it right there.",
         "Okay, out!",
         "Out please!",
+        "Hold right here.",
+        "Alt right here.",
     ):
         assert transcript_is_stop(heard(text)), text
     for text in (
+        "Walk to the dock and stop here.",
         "Don't stop now.",
         "I said stop.",
         "Then you just stop right now.",

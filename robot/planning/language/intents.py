@@ -262,6 +262,12 @@ def _shapes() -> tuple[tuple[re.Pattern[str], Build], ...]:
             _go,
         ),
         (rf"(?:make|find) your way(?: {_AWAY})? {_GO_TO} (?P<place>.+)", _go),
+        # "keep going to the counter", "carry on walking over to the dock"
+        (
+            r"(?:keep|carry on|continue)(?: on)? (?:going|walking|moving|heading|driving)(?: on| straight| right)?"
+            rf"(?: over)? {_GO_TO} (?P<place>.+)",
+            _go,
+        ),
         (
             rf"(?:{verbs(*GO_VERBS)}|get yourself|pop|nip|hop|swing)(?: on| straight| right)?(?: {_AWAY})?"
             rf"(?: over)? {_GO_TO} (?P<place>.+)",
