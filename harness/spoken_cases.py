@@ -933,6 +933,77 @@ HELDOUT11 = SpokenSet(
     ),
 )
 
+# written at stop 82, before anything heard it: four more voices, and everyday wording none of the sets above has
+HELDOUT12 = SpokenSet(
+    name="heldout12",
+    voices=(
+        Voice("en-us+travis", 155),
+        Voice("en-gb-scotland+Michael", 165, 55),
+        Voice("en-029+ed", 160, 45),
+        Voice("en-gb-x-gbclan+Lee", 150, 60),
+    ),
+    commands=(
+        Case("would you get me the mug please", fetch(MUG)),
+        Case("fetch the green apple", fetch(APPLE)),
+        Case("i'd like the bottle of water", fetch(BOTTLE)),
+        Case("walk over to the charging station", go(DOCK)),
+        Case("go and stand by the counter", go(COUNTER)),
+        Case("head into the living room", go(TABLE)),
+        Case("put the bottle on the kitchen counter", carry(BOTTLE, COUNTER)),
+        Case("take the red mug over to the coffee table", carry(MUG, TABLE)),
+        Case("leave the apple on the coffee table", carry(APPLE, TABLE)),
+        Case("where is the blue bottle", find(BOTTLE)),
+        Case("can you find the apple", find(APPLE)),
+        Case("have a look around the room", LOOK),
+        Case("what do you see", LOOK_AND_TELL),
+        Case("head back to where you started", HOME),
+        Case("go home now", HOME),
+        Case("pick up the bottle and put it on the table", carry(BOTTLE, TABLE)),
+        Case("first go to the counter, then go to the dock", seq(go(COUNTER), go(DOCK))),
+        Case("say good night everyone", say("good night everyone")),
+        Case("announce that the meeting starts now", say("the meeting starts now")),
+        Case("wait for five seconds", wait("5")),
+        Case("pause for two seconds", wait("2")),
+        Case("hey robot, fetch me the red mug", fetch(MUG)),
+        Case("i could use an apple", fetch(APPLE)),
+        Case("put it down on the counter", carry(APPLE, COUNTER, held=True), held=APPLE),
+        Case("now bring it to me", fetch(MUG), history=(("find the red mug", find(MUG)),)),
+        Case("the bottle, put it on the counter", carry(BOTTLE, COUNTER)),
+        Case("go over to the table in the living room", go(TABLE)),
+        Case("look around, then go back home", seq(LOOK, HOME)),
+    ),
+    stops=(
+        "stop",
+        "stop now",
+        "halt now",
+        "freeze",
+        "robot, halt",
+        "emergency stop",
+        "stop, stop",
+        "please stop",
+        "freeze right there",
+        "stop immediately",
+        "okay robot, stop",
+        "halt, please",
+    ),
+    with_stop=(
+        Case("walk to the counter and then stop", go(COUNTER)),
+        Case("go to the table, stop there", go(TABLE)),
+        Case("don't stop until you reach the dock", go(DOCK)),
+        Case("grab the apple without stopping", fetch(APPLE)),
+    ),
+    out_of_world=(
+        "bring me my glasses",
+        "go to the garage",
+        "open the fridge",
+        "water the plants",
+        "put the mug in the dishwasher",
+        "sing me a song",
+        "text my mom",
+        "climb the stairs",
+    ),
+)
+
 SETS: dict[str, SpokenSet] = {
     s.name: s
     for s in (
@@ -948,6 +1019,7 @@ SETS: dict[str, SpokenSet] = {
         HELDOUT9,
         HELDOUT10,
         HELDOUT11,
+        HELDOUT12,
     )
 }
 
