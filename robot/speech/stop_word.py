@@ -33,6 +33,7 @@ import numpy as np
 
 from robot.planning.language.lexicon import (
     CLAUSE_VERBS,
+    GO_VERBS,
     HAND_VERBS,
     OBJECT_WORDS,
     OTHER_ROOMS,
@@ -91,7 +92,27 @@ def ends_with_stop(text: str) -> bool:
     if is_stop_utterance(text):
         return True
     clauses = [c for c in _CLAUSE_BREAK.split(text) if normalize(c).strip()]
-    return len(clauses) > 1 and is_stop_utterance(clauses[-1])
+    if len(clauses) < 2 or not is_stop_utterance(clauses[-1]):
+        return False
+    return not stops_at_the_place_named_before(clauses[:-1], clauses[-1])
+
+
+# "Go to the table, stop there.": "there" (or "here") is the place the clause before it names, so the stop says where
+# a walk ends, as "go to the dock and stop there" does (every voice of the thirteenth spoken set, stop 82). "Stop right
+# there" stays a stop: said after a command it is someone stopping the robot on its way.
+_STOP_AT_THAT_PLACE = re.compile(rf"^(?:{_BEFORE} )*(?:stop|halt) (?:there|here)$")
+_PLACE_NAMES = tuple(
+    dict.fromkeys(name for names in (*PLACE_WORDS.values(), *ROOM_WORDS.values(), OTHER_ROOMS) for name in names)
+)
+
+
+def stops_at_the_place_named_before(before: list[str], last: str) -> bool:
+    """The last clause is "stop there" (or "here") and a clause before it names a place to go to."""
+    if not _STOP_AT_THAT_PLACE.match(" ".join(normalize(last).split())):
+        return False
+    words = " ".join(normalize(c) for c in before).split()
+    joined = f" {' '.join(words)} "
+    return any(word in GO_VERBS for word in words) and any(f" {name} " in joined for name in _PLACE_NAMES)
 
 
 # Whisper writes "hey stop" in an unusual voice as "Nice stop!", "High stop!" or "He's top." (the fifth held-out set,

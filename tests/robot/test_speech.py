@@ -465,7 +465,15 @@ def test_a_transcript_ending_in_a_stop_clause_is_a_stop_and_a_command_that_stops
     def heard(text: str, *others: str) -> Transcript:
         return Transcript(text, 0.6, "whisper", False, 1.0, 0.1, others)
 
-    for text in ("Okay, move on, stop!", "No, no, stop.", "Wait. Stop right now!", "Walk to the counter. Stop."):
+    for text in (
+        "Okay, move on, stop!",
+        "No, no, stop.",
+        "Wait. Stop right now!",
+        "Walk to the counter. Stop.",
+        "Go to the table, stop right there!",
+        "Okay, stop there.",
+        "Hey, table, stop there.",
+    ):
         assert transcript_is_stop(heard(text)), text
     assert transcript_is_stop(heard("Okay, move, not stop.", "Okay, move. Stop!"))
     for text in (
@@ -474,6 +482,8 @@ def test_a_transcript_ending_in_a_stop_clause_is_a_stop_and_a_command_that_stops
         "Stop, bite my kitchen and get to the mug.",
         "Fetch the bottle, don't stop on the way.",
         "Go to the dock and stop there.",
+        "Go to the table, stop there.",
+        "Walk over to the kitchen. Stop here.",
         "Okay, move on.",
     ):
         assert not transcript_is_stop(heard(text)), text
