@@ -525,6 +525,7 @@ class BusEmulator:
         self.stop()
 
     daemon_process = True  # ended with the process that made it (one that starts processes of its own cannot be)
+    start_timeout_s = 30.0  # how long its process may take to open its port
 
     def _child(self) -> tuple[Callable[..., None], tuple]:
         """What the emulator's process runs, and its arguments after the pipe's end."""
@@ -540,10 +541,16 @@ class BusEmulator:
         self._process.start()
         child.close()
         self._conn = parent
-        if not parent.poll(30):
-            self._process.kill()
-            raise RuntimeError("the bus emulator did not start")
-        self.port_name = parent.recv()
+        deadline = time.monotonic() + self.start_timeout_s
+        while not parent.poll(0.5):  # (a process that ended makes the pipe readable too)
+            if time.monotonic() > deadline:
+                self._process.kill()
+                raise RuntimeError(f"the bus emulator did not start within {self.start_timeout_s:.0f} s")
+        try:
+            self.port_name = parent.recv()
+        except EOFError:
+            self._process.join(timeout=5)
+            raise RuntimeError(f"the bus emulator exited while starting (exit code {self._process.exitcode})") from None
 
     def stop(self) -> None:
         if self._conn is not None:

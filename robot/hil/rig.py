@@ -102,6 +102,9 @@ class HilRig(BusEmulator):
         )
 
     daemon_process = False  # it starts the sensors' process; `stop` (or leaving the `with`) ends both
+    # It builds the simulated world first: on a machine whose cache is cold (its first run), simplifying the
+    # meshes takes a minute or more on two busy cores (30 s was too short once: "the bus emulator did not start").
+    start_timeout_s = 600.0
 
     def _child(self) -> tuple[Callable[..., None], tuple]:
         return _serve_rig, (self.layout, self.config, self.baudrate, self.wire_time, self.lockstep)

@@ -184,3 +184,45 @@ def test_the_bus_watchdog_stops_a_servo_that_hears_nothing(bus) -> None:
     assert packets.write1ByteTxRx(port, 2, ct.BUS_WATCHDOG.address, 5)[1] == 4
     assert packets.write1ByteTxRx(port, 2, ct.BUS_WATCHDOG.address, 0)[:2] == (COMM_SUCCESS, 0)
     assert packets.write4ByteTxRx(port, 2, ct.GOAL_POSITION.address, 3000)[:2] == (COMM_SUCCESS, 0)
+
+
+def _start_slowly(conn, seconds: float) -> None:
+    time.sleep(seconds)  # as the rig's process building its world on a machine whose caches are cold
+    conn.send("/dev/pts/fake")
+    conn.recv()
+
+
+def _fail_at_once(conn) -> None:
+    raise SystemExit(3)
+
+
+class _SlowEmulator(BusEmulator):
+    start_timeout_s = 60.0
+
+    def __init__(self, target, *args) -> None:
+        super().__init__([])
+        self._target, self._args = target, args
+
+    def _child(self):
+        return self._target, self._args
+
+    def stop(self) -> None:
+        if self._process is not None:
+            self._process.kill()
+            self._process.join()
+
+
+def test_an_emulator_slower_to_start_than_a_reply_is_waited_for_and_one_that_dies_says_so_at_once() -> None:
+    slow = _SlowEmulator(_start_slowly, 2.0)
+    slow.start_timeout_s = 1.0
+    with pytest.raises(RuntimeError, match="did not start within 1 s"):
+        slow.start()
+    slow.stop()
+    patient = _SlowEmulator(_start_slowly, 2.0)
+    patient.start_timeout_s = 120.0
+    patient.start()
+    assert patient.port_name == "/dev/pts/fake"
+    patient.stop()
+    dying = _SlowEmulator(_fail_at_once)
+    with pytest.raises(RuntimeError, match="exited while starting"):
+        dying.start()
