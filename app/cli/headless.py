@@ -65,6 +65,7 @@ def run_command(
                 disk_path=settings.data_dir,
                 deadman_s=0.0,
                 walk=True,
+                wait_for_plans=True,
             )
             return _run_on(robot, text, seed, settings, timeout_s, heard, rig)
     worker = RobotWorker(

@@ -40,10 +40,13 @@ class HardwareWorker(Robot):
         locomotion: LocomotionController | None = None,
         imu: ImuDriver | None = None,
         walk: bool = False,
+        wait_for_plans: bool = False,
     ) -> None:
         """`locomotion`: the legs' controller (None: postures only, unless `walk`); `walk`: build the legs'
         controller when the config names an IMU and foot sensors, which it needs; `imu`: an IMU driver to use
-        instead of the one `config.imu` names (tests)."""
+        instead of the one `config.imu` names (tests); `wait_for_plans`: the walk waits for each gait plan, as headless
+        (for a rig in lockstep, whose physics waits for the robot: a plan late on a busy machine would otherwise
+        change the walk)."""
         bus = bus or DynamixelBus(config)
         started = time.monotonic()  # the body's clock, which its sensors stamp their readings with too
 
@@ -63,7 +66,7 @@ class HardwareWorker(Robot):
             started_at=started,
         )
         if walking and locomotion is None:  # the simulation's legs' controller; a late plan never stalls the loop
-            locomotion = build_locomotion(body.scene, planner_process=True, realtime=True)
+            locomotion = build_locomotion(body.scene, planner_process=True, realtime=not wait_for_plans)
         robot = RobotConfig(
             realtime=True,
             control_hz=config.control_hz,
