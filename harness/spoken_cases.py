@@ -1004,6 +1004,77 @@ HELDOUT12 = SpokenSet(
     ),
 )
 
+HELDOUT13 = SpokenSet(
+    name="heldout13",
+    voices=(
+        Voice("en-us+Alex", 160),
+        Voice("en-gb+michel", 150, 55),
+        Voice("en-gb-x-gbcwmd+sandro", 165, 45),
+        Voice("en-us-nyc+Denis", 155, 60),
+    ),
+    commands=(
+        Case("could you bring me the blue bottle", fetch(BOTTLE)),
+        Case("grab the mug off the counter", fetch(MUG)),
+        Case("go get the apple for me", fetch(APPLE)),
+        Case("i need the red cup", fetch(MUG)),
+        Case("walk to the kitchen", go(COUNTER)),
+        Case("go over to the charger", go(DOCK)),
+        Case("please head to the coffee table", go(TABLE)),
+        Case("take the apple to the table", carry(APPLE, TABLE)),
+        Case("put the mug on the charging dock", carry(MUG, DOCK)),
+        Case("carry the water bottle to the living room", carry(BOTTLE, TABLE)),
+        Case("look for the bottle", find(BOTTLE)),
+        Case("where did the red mug go", find(MUG)),
+        Case("look around you", LOOK),
+        Case("tell me what you can see", LOOK_AND_TELL),
+        Case("return to your starting point", HOME),
+        Case("go back home please", HOME),
+        Case("pick up the apple and bring it to the table", carry(APPLE, TABLE)),
+        Case("go to the table and then come back home", seq(go(TABLE), HOME)),
+        Case("say hello there", say("hello there")),
+        Case("tell everyone that lunch is ready", say("lunch is ready")),
+        Case("wait three seconds", wait("3")),
+        Case("hold on for four seconds", wait("4")),
+        Case("okay robot, go to the counter", go(COUNTER)),
+        Case("i would like the water bottle please", fetch(BOTTLE)),
+        Case("now put it on the table", carry(MUG, TABLE, held=True), held=MUG),
+        Case("go and get it", fetch(APPLE), history=(("where is the apple", find(APPLE)),)),
+        Case("the red mug, bring it to me", fetch(MUG)),
+        Case("first have a look around, then go to the dock", seq(LOOK, go(DOCK))),
+    ),
+    stops=(
+        "stop",
+        "stop it",
+        "halt",
+        "freeze now",
+        "robot, stop",
+        "emergency stop",
+        "stop stop stop",
+        "stop right now",
+        "halt immediately",
+        "please freeze",
+        "hey, stop",
+        "stop, please",
+    ),
+    with_stop=(
+        Case("go to the dock and stop when you get there", go(DOCK)),
+        Case("walk to the table then stop", go(TABLE)),
+        Case("bring me the mug and don't stop on the way", fetch(MUG)),
+        Case("keep walking to the counter, do not stop", go(COUNTER)),
+    ),
+    out_of_world=(
+        "bring me a towel from the bathroom",
+        "go to the bedroom",
+        "turn on the lights",
+        "feed the dog",
+        "put the apple in the oven",
+        "dance for me",
+        "call my brother",
+        "take out the trash",
+    ),
+)
+
+
 SETS: dict[str, SpokenSet] = {
     s.name: s
     for s in (
@@ -1020,6 +1091,7 @@ SETS: dict[str, SpokenSet] = {
         HELDOUT10,
         HELDOUT11,
         HELDOUT12,
+        HELDOUT13,
     )
 }
 

@@ -570,8 +570,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     bench.add_argument(
         "--sets",
-        default="dev,heldout,heldout2,heldout3,heldout4,heldout5,heldout6,heldout7,heldout8,heldout9,heldout10,heldout11,heldout12",
-        help="speech: spoken sets (dev, heldout, heldout2 ... heldout12), comma-separated",
+        default="dev,heldout,heldout2,heldout3,heldout4,heldout5,heldout6,heldout7,heldout8,heldout9,heldout10,heldout11,heldout12,heldout13",
+        help="speech: spoken sets (dev, heldout, heldout2 ... heldout13), comma-separated",
     )
     bench.add_argument(
         "--whisper-model",
