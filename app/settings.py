@@ -117,6 +117,11 @@ class Settings(BaseSettings):
     whisper_model_dir: str = Field(
         "", description="a faster-whisper (CTranslate2) model directory (empty: the one the whisper extra installs)"
     )
+    whisper_second_model: str = Field(
+        "auto",
+        description="a second whisper model that hears again what the first is not sure of: auto (the base model "
+        "the whisper extra installs), off, or a CTranslate2 model directory",
+    )
     spoken_stop: bool = Field(True, description='a spoken "stop", "halt" or "freeze" latches the e-stop')
     asr_timeout_s: float = Field(
         15.0, gt=0, le=120, description="the page's recordings: a recogniser that takes longer is stopped (503)"
@@ -166,6 +171,7 @@ class Settings(BaseSettings):
             speaker=self.speaker,
             engine=self.asr_engine,
             whisper_model_dir=self.whisper_model_dir,
+            whisper_second_model=self.whisper_second_model,
             auto_run=self.voice_auto_run,
             spoken_stop=self.spoken_stop,
             spool_dir=str(Path(self.audio_dir) / "incoming"),

@@ -79,6 +79,7 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
             robot_microphone=not args.no_robot_microphone,
             quick=args.quick,
             whisper_model=args.whisper_model,
+            whisper_second_model=args.whisper_second_model,
         )
     elif suite == "planner":
         from app.settings import get_settings

@@ -133,7 +133,9 @@ def _transcribe_file(path: str, engine: str | None, seed: int, settings: Setting
     world = WorldContext.from_layout(generate_world(seed))
     audio = read_audio(path)
     engine = engine or settings.asr_engine
-    recognizer = build_recognizer(engine, world.objects, world.places, settings.whisper_model_dir)
+    recognizer = build_recognizer(
+        engine, world.objects, world.places, settings.whisper_model_dir, settings.whisper_second_model
+    )
     verdict = StopSpotter(world.objects, world.places).spot(audio)
     transcript = recognizer.transcribe(audio)
     return {
@@ -145,6 +147,7 @@ def _transcribe_file(path: str, engine: str | None, seed: int, settings: Setting
         "decode_ms": round(transcript.decode_s * 1000, 1),
         "alternatives": list(transcript.alternatives),
         "unsure_names": list(transcript.unsure_names),
+        "heard_again": transcript.heard_again,
         "stop_word": verdict.stop or transcript_is_stop(transcript),
     }
 
@@ -577,6 +580,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--whisper-model",
         default="",
         help="speech: a CTranslate2 whisper model directory to measure instead of the packaged tiny.en",
+    )
+    bench.add_argument(
+        "--whisper-second-model",
+        default="auto",
+        help="speech: the model that hears again what the first is not sure of (auto: the packaged base; off: none; "
+        "or a directory)",
     )
     bench.add_argument(
         "--engines", default="whisper,pocketsphinx", help="speech: recognisers (whisper, pocketsphinx), comma-separated"

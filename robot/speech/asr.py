@@ -30,6 +30,8 @@ class Transcript:
     # The world's names in `text` that the audio alone barely supports: the recogniser's hints put them there more
     # than the speaker did ("Bring the apple." for "bring me a towel"). The transcript is then not sure.
     unsure_names: tuple[str, ...] = ()
+    # A second model heard it again, because the first was not sure: `text` is the second's, `alternatives` both's
+    heard_again: bool = False
 
     @property
     def sure(self) -> bool:

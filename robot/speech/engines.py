@@ -21,8 +21,13 @@ def resolve_engine(engine: str, whisper_model_dir: str = "") -> str:
 
 
 def build_recognizer(
-    engine: str, objects: dict[str, tuple[str, ...]], places: dict[str, tuple[str, ...]], whisper_model_dir: str = ""
+    engine: str,
+    objects: dict[str, tuple[str, ...]],
+    places: dict[str, tuple[str, ...]],
+    whisper_model_dir: str = "",
+    whisper_second_model: str = "auto",
 ) -> SpeechRecognizer:
+    """`whisper_second_model`: what hears again what whisper's model is not sure of (see `WhisperASR`)."""
     engine = resolve_engine(engine, whisper_model_dir)
     if engine == "pocketsphinx":
         from robot.speech.sphinx import PocketSphinxASR
@@ -31,5 +36,5 @@ def build_recognizer(
     if engine == "whisper":
         from robot.speech.whisper import WhisperASR
 
-        return WhisperASR(whisper_model_dir, objects, places)
+        return WhisperASR(whisper_model_dir, objects, places, second_model=whisper_second_model)
     raise ASRError(f"unknown speech engine {engine!r} (known: {', '.join(ENGINES)})")

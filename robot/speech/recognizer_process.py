@@ -57,6 +57,7 @@ class RecognizerProcess:
         places: dict[str, tuple[str, ...]],
         whisper_model_dir: str = "",
         spotter: bool = False,
+        whisper_second_model: str = "auto",
     ) -> None:
         from robot.speech.engines import resolve_engine
 
@@ -73,7 +74,7 @@ class RecognizerProcess:
         self._lock = threading.Lock()
         assert self._process.stdin is not None and self._process.stdout is not None
         self._in, self._out = self._process.stdin, self._process.stdout
-        _send(self._in, (engine, objects, places, whisper_model_dir, spotter))
+        _send(self._in, (engine, objects, places, whisper_model_dir, spotter, whisper_second_model))
         reply = self._reply()
         if reply[0] != "ready":
             self.close()
@@ -143,9 +144,9 @@ def _serve(stdin: IO[bytes], stdout: IO[bytes]) -> None:
     from robot.speech.engines import build_recognizer
     from robot.speech.stop_word import StopSpotter
 
-    engine, objects, places, whisper_model_dir, with_spotter = _receive(stdin)
+    engine, objects, places, whisper_model_dir, with_spotter, second_model = _receive(stdin)
     try:
-        recognizer = build_recognizer(engine, objects, places, whisper_model_dir) if engine else None
+        recognizer = build_recognizer(engine, objects, places, whisper_model_dir, second_model) if engine else None
         spotter = StopSpotter(objects, places) if with_spotter else None
     except ASRError as exc:
         _send(stdout, ("error", str(exc)))

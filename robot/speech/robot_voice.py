@@ -51,6 +51,7 @@ class VoiceConfig:
     speaker: str = "auto"
     engine: str = "auto"  # whisper when it is installed, else pocketsphinx
     whisper_model_dir: str = ""
+    whisper_second_model: str = "auto"  # hears again what whisper's model is not sure of ("off": none)
     auto_run: bool = True  # run what it hears when the recogniser is sure; else the operator confirms in the page
     spoken_stop: bool = True  # a spoken "stop" (alone, or with a few words) latches the e-stop
     spool_dir: str = ""  # where heard utterances wait for the session store ("" = a temporary directory)
@@ -135,7 +136,11 @@ class RobotVoice:
             try:
                 # decoding in its own process: in the worker's it would stall the control loop (see there)
                 self._recognizer = self._recognizer_factory(
-                    self.config.engine, self._objects, self._places, self.config.whisper_model_dir
+                    self.config.engine,
+                    self._objects,
+                    self._places,
+                    self.config.whisper_model_dir,
+                    whisper_second_model=self.config.whisper_second_model,
                 )
                 if self.config.spoken_stop and self._estop is not None:
                     self._spotter = RecognizerProcess("", self._objects, self._places, spotter=True)
@@ -298,6 +303,7 @@ class RobotVoice:
             "decode_ms": round(transcript.decode_s * 1000, 1),
             "alternatives": list(transcript.alternatives),
             "unsure_names": list(transcript.unsure_names),
+            "heard_again": transcript.heard_again,
             "auto_run": transcript.sure,
             "will_run": will_run,
             "source": SOURCE,
@@ -338,7 +344,11 @@ class RobotVoice:
             self._recognizer.close()
         try:
             self._recognizer = self._recognizer_factory(
-                self.config.engine, self._objects, self._places, self.config.whisper_model_dir
+                self.config.engine,
+                self._objects,
+                self._places,
+                self.config.whisper_model_dir,
+                whisper_second_model=self.config.whisper_second_model,
             )
         except Exception as exc:
             self.microphone_status = f"no robot microphone: the recogniser cannot restart ({exc})"

@@ -46,7 +46,12 @@ def recognizer(rt: Runtime) -> RecognizerProcess:
                 current.close()
             world = WorldContext.from_layout(generate_world(rt.settings.seed))
             _recognizers[key] = RecognizerProcess(
-                rt.settings.asr_engine, world.objects, world.places, rt.settings.whisper_model_dir, spotter=True
+                rt.settings.asr_engine,
+                world.objects,
+                world.places,
+                rt.settings.whisper_model_dir,
+                spotter=True,
+                whisper_second_model=rt.settings.whisper_second_model,
             )
         return _recognizers[key]
 
@@ -114,6 +119,7 @@ async def transcribe(request: Request, rt: RuntimeDep) -> dict[str, Any]:
         "alternatives": list(transcript.alternatives),
         # the world's names the audio alone barely supports (the hints put them there): why it is not sure
         "unsure_names": list(transcript.unsure_names),
+        "heard_again": transcript.heard_again,
         # the page runs it without asking when its operator allows that and the recogniser is this sure
         "auto_run": transcript.sure and latched is None,
         "stop_word": latched is not None,
