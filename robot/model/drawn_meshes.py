@@ -10,20 +10,17 @@ written to the user's cache named by what they were made from, and made again on
 
 from __future__ import annotations
 
-import contextlib
-import fcntl
 import hashlib
 import logging
 import os
 import tempfile
 import threading
-from collections.abc import Iterator
 from pathlib import Path
 
 import fast_simplification
 import numpy as np
 
-from robot.user_cache import user_cache_dir
+from robot.user_cache import cache_lock, user_cache_dir
 
 log = logging.getLogger(__name__)
 
@@ -119,20 +116,10 @@ def drawn_mesh(source: Path, directory: Path | None = None) -> Path:
     if path.is_file():
         return path
     directory.mkdir(parents=True, exist_ok=True)
-    with _making_lock(directory):  # processes starting together: one makes it, the others wait and read it
+    with cache_lock(directory, "making"):  # processes starting together: one makes it, the others wait and read it
         if path.is_file():
             return path
         return _make(source, path)
-
-
-@contextlib.contextmanager
-def _making_lock(directory: Path) -> Iterator[None]:
-    with (directory / ".making.lock").open("a") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(lock, fcntl.LOCK_UN)
 
 
 def _make(source: Path, path: Path) -> Path:

