@@ -32,6 +32,8 @@ class Transcript:
     unsure_names: tuple[str, ...] = ()
     # A second model heard it again, because the first was not sure: `text` is the second's, `alternatives` both's
     heard_again: bool = False
+    # Wordings further down the beam than the alternatives: only the spoken stop looks at them, in a short utterance
+    further_wordings: tuple[str, ...] = ()
 
     @property
     def sure(self) -> bool:

@@ -54,6 +54,10 @@ ALTERNATIVE_MARGIN = 0.4
 NAME_EVIDENCE = 0.03
 # how often such a transcript was still word for word right on the development set: 18 of 27
 UNSURE_NAME_CONFIDENCE = 0.65
+# Further down the beam (within this of each model's likeliest) a spoken stop the transcript missed often is: "Halt
+# out." and "The emergency stop." under "Alt out." and "The Emergency Seat Stop." Only the spoken stop looks there
+# (`transcript_is_stop`): a command is not planned from so far down. Measured in docs/speech.md.
+FURTHER_MARGIN = 1.0
 ONE_WINDOW_S = 30.0
 NO_SPEECH_PROB, NO_SPEECH_LOGPROB = 0.6, -1.0  # `transcribe`'s defaults: a window this sure of no speech is skipped
 
@@ -164,12 +168,15 @@ class WhisperASR:
                     confidence = min(confidence, UNSURE_NAME_CONFIDENCE)
                 others = alternatives(hypotheses) if text else ()
                 heard_again = False
+                beams = [hypotheses]
                 if self._second_beam is not None and confidence < AUTO_RUN_CONFIDENCE:
                     again = self._second_beam.decode(self._second_beam.encode(samples))
                     if again[0].text:
                         text, others = heard_twice(hypotheses, again)
                         heard_again = True
+                        beams.append(again)
                         unsure = tuple(n for n in unsure if n in normalize(text).split())
+                further = further_wordings(beams, (text, *others)) if text else ()
             return Transcript(
                 text,
                 confidence,
@@ -180,6 +187,7 @@ class WhisperASR:
                 others,
                 unsure,
                 heard_again,
+                further,
             )
         with self._lock:  # longer than a command: whisper's own windowing, one transcript
             segments, _ = self._model.transcribe(
@@ -336,6 +344,23 @@ def alternatives(hypotheses: list[Hypothesis], margin: float = ALTERNATIVE_MARGI
         if best - hypothesis.score <= margin and words and words not in seen:
             seen.add(words)
             kept.append(hypothesis.text)
+    return tuple(kept)
+
+
+def further_wordings(
+    beams: list[list[Hypothesis]], heard: tuple[str, ...], margin: float = FURTHER_MARGIN
+) -> tuple[str, ...]:
+    """The wordings further down each model's beam, within `margin` of that model's likeliest, not already among
+    `heard` (the transcript and its alternatives), each once: where a stop said in an unusual voice often is."""
+    seen = {normalize(text) for text in heard}
+    kept = []
+    for hypotheses in beams:
+        best = hypotheses[0].score if hypotheses else 0.0
+        for hypothesis in hypotheses[1:]:
+            words = normalize(hypothesis.text)
+            if best - hypothesis.score <= margin and words and words not in seen:
+                seen.add(words)
+                kept.append(hypothesis.text)
     return tuple(kept)
 
 

@@ -563,6 +563,62 @@ def test_a_transcript_ending_in_a_stop_clause_is_a_stop_and_a_command_that_stops
         assert not transcript_is_stop(heard(text)), text
 
 
+def test_a_short_utterance_is_a_stop_when_a_wording_further_down_the_beam_is_one_and_a_long_one_is_not() -> None:
+    """Whisper heard "halt now" as "Alt out." with "Halt out." further down its beam (the thirteenth spoken set)."""
+    from robot.speech.asr import Transcript
+    from robot.speech.stop_word import transcript_is_stop
+
+    def heard(text: str, further: tuple[str, ...], audio_s: float = 1.5) -> Transcript:
+        return Transcript(text, 0.4, "whisper", False, audio_s, 0.1, (), (), False, further)
+
+    assert transcript_is_stop(heard("Alt out.", ("All that.", "Halt out.")))
+    assert transcript_is_stop(heard("The Emergency Seat Stop.", ("The emergency stop.",)))
+    assert not transcript_is_stop(heard("Alt out.", ("All that.", "Halt out."), audio_s=5.0))  # a longer command
+    assert not transcript_is_stop(heard("Go to the top.", ("Go to the stop.", "Go to the table and stop there.")))
+
+
+def test_whispers_further_wordings_are_the_rest_of_each_beam_within_the_margin_once_each() -> None:
+    from robot.speech.whisper import Hypothesis, further_wordings
+
+    tiny = [
+        Hypothesis("Alt out.", -0.5, -0.5),
+        Hypothesis("All that.", -0.7, -0.7),  # an alternative already
+        Hypothesis("Halt out.", -1.2, -1.2),
+        Hypothesis("Walk out.", -1.8, -1.8),  # too far below tiny's best
+    ]
+    base = [
+        Hypothesis("Halt, now.", -0.9, -0.9),
+        Hypothesis("Halt now!", -1.0, -1.0),
+        Hypothesis("Hold on.", -1.5, -1.5),
+    ]
+    # heard again: base's likeliest is the transcript ("Halt now!" is the same words), tiny.en's among the alternatives
+    assert further_wordings([tiny, base], ("Halt, now.", "Alt out.", "All that.")) == ("Halt out.", "Hold on.")
+    assert further_wordings([tiny[:1]], ("Alt out.",)) == ()
+
+
+def test_a_stop_said_first_then_a_few_misheard_words_is_a_stop_unless_they_ask_for_something_or_take_it_back() -> None:
+    """Whisper heard "stop stop stop" in noise as "Stop! It's time! It's time!" (the thirteenth spoken set)."""
+    from robot.speech.asr import Transcript
+    from robot.speech.stop_word import transcript_is_stop
+
+    def heard(text: str, audio_s: float = 1.5) -> Transcript:
+        return Transcript(text, 0.4, "whisper", False, audio_s, 0.1, ())
+
+    for text in ("Stop! It's time! It's time!", "Freeze. The robot is falling.", "Halt! Oh my goodness."):
+        assert transcript_is_stop(heard(text)), text
+    for text in (
+        "Stop! Never mind.",
+        "Stop, sorry, carry on.",
+        "Freeze. Just kidding.",
+        "Stop. Go to the kitchen.",
+        "Halt! Then pick up the mug.",
+        "Stop, no, keep going.",
+        "Stop. Bring the apple.",
+    ):
+        assert not transcript_is_stop(heard(text)), text
+    assert not transcript_is_stop(heard("Stop! It's time! It's time!", audio_s=6.0))
+
+
 def test_whispers_prompt_names_every_thing_and_place_and_the_longer_names_people_use(world) -> None:
     from robot.speech.whisper import world_prompt
 
