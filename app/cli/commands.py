@@ -148,6 +148,8 @@ def _transcribe_file(path: str, engine: str | None, seed: int, settings: Setting
         "alternatives": list(transcript.alternatives),
         "unsure_names": list(transcript.unsure_names),
         "heard_again": transcript.heard_again,
+        # further down the beam: only the spoken stop looks at them
+        "further_wordings": list(transcript.further_wordings),
         "stop_word": verdict.stop or transcript_is_stop(transcript),
     }
 
@@ -573,8 +575,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     bench.add_argument(
         "--sets",
-        default="dev,heldout,heldout2,heldout3,heldout4,heldout5,heldout6,heldout7,heldout8,heldout9,heldout10,heldout11,heldout12,heldout13",
-        help="speech: spoken sets (dev, heldout, heldout2 ... heldout13), comma-separated",
+        default="dev,heldout,heldout2,heldout3,heldout4,heldout5,heldout6,heldout7,heldout8,heldout9,heldout10,heldout11,heldout12,heldout13,heldout14",
+        help="speech: spoken sets (dev, heldout, heldout2 ... heldout14), comma-separated",
     )
     bench.add_argument(
         "--whisper-model",

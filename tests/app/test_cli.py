@@ -227,6 +227,7 @@ def test_transcribe_hears_everyday_wording_with_whisper_by_default_and_reports_a
     heard = json.loads(humanoid(tmp_path, "transcribe", str(command), "--json").stdout)
     assert heard["engine"] == "whisper"  # the test set-up installs the whisper extra: it is the default
     assert "stop there" in heard["text"].lower() and heard["stop_word"] is False, heard
+    assert all(isinstance(w, str) for w in heard["further_wordings"])  # the rest of the beam, for the stop
     halted = json.loads(humanoid(tmp_path, "transcribe", str(stop), "--json").stdout)
     assert halted["stop_word"] is True, halted
     grammar = json.loads(humanoid(tmp_path, "transcribe", str(stop), "--json", "--engine", "pocketsphinx").stdout)

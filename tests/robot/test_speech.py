@@ -564,16 +564,19 @@ def test_a_transcript_ending_in_a_stop_clause_is_a_stop_and_a_command_that_stops
 
 
 def test_a_short_utterance_is_a_stop_when_a_wording_further_down_the_beam_is_one_and_a_long_one_is_not() -> None:
-    """Whisper heard "halt now" as "Alt out." with "Halt out." further down its beam (the thirteenth spoken set)."""
+    """Whisper heard "halt right there" as "Alt-right hair." with "Hold right there." further down its beam (the
+    eleventh spoken set)."""
     from robot.speech.asr import Transcript
     from robot.speech.stop_word import transcript_is_stop
 
     def heard(text: str, further: tuple[str, ...], audio_s: float = 1.5) -> Transcript:
         return Transcript(text, 0.4, "whisper", False, audio_s, 0.1, (), (), False, further)
 
-    assert transcript_is_stop(heard("Alt out.", ("All that.", "Halt out.")))
+    assert transcript_is_stop(heard("Alt-right hair.", ("Hold right, head.", "Hold right there.")))
     assert transcript_is_stop(heard("The Emergency Seat Stop.", ("The emergency stop.",)))
-    assert not transcript_is_stop(heard("Alt out.", ("All that.", "Halt out."), audio_s=5.0))  # a longer command
+    assert not transcript_is_stop(heard("Alt-right hair.", ("Hold right there.",), audio_s=5.0))  # a longer command
+    assert not transcript_is_stop(heard("Hard to beat the apple.", ("Hand me the bottle.", "Halt!")))  # stopped early
+    assert not transcript_is_stop(heard("Call my brother.", ("Called my brother.", "Halt my brother.")))
     assert not transcript_is_stop(heard("Go to the top.", ("Go to the stop.", "Go to the table and stop there.")))
 
 
