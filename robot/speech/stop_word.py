@@ -230,17 +230,18 @@ def transcript_is_stop(transcript: Transcript) -> bool:
         return True
     if transcript.audio_s > MAX_STOP_UTTERANCE_S:
         return False
+    further = covering(transcript.further_wordings, transcript.text)
     return stop_first_then_nothing_asked(transcript.text) or any(
-        ends_with_stop(wording) or two_words_stop(wording)
-        for wording in covering(transcript.further_wordings, transcript.text)
+        is_stop_utterance(wording) or two_words_stop(wording) for wording in further
     )
 
 
 def covering(wordings: tuple[str, ...], text: str) -> tuple[str, ...]:
     """The wordings with at least as many words as `text`, less one: a hypothesis much shorter than the transcript
     stopped early, and "Halt!" is where many a beam for "hand me the apple" or "say hello there" stops (the eleventh
-    and fourteenth spoken sets). The rules for a misheard tail or head are not tried so far down: "Halt my brother."
-    under "Call my brother." would be a stop by them."""
+    and fourteenth spoken sets). Only a whole wording that is a stop counts so far down, not a stop said last nor one
+    with a misheard tail: "Return home, halt!" under "Return home now." and "Halt my brother." under "Call my
+    brother." would be stops by those."""
     least = len(normalize(text).split()) - 1
     return tuple(w for w in wordings if len(normalize(w).split()) >= least)
 

@@ -577,6 +577,7 @@ def test_a_short_utterance_is_a_stop_when_a_wording_further_down_the_beam_is_one
     assert not transcript_is_stop(heard("Alt-right hair.", ("Hold right there.",), audio_s=5.0))  # a longer command
     assert not transcript_is_stop(heard("Hard to beat the apple.", ("Hand me the bottle.", "Halt!")))  # stopped early
     assert not transcript_is_stop(heard("Call my brother.", ("Called my brother.", "Halt my brother.")))
+    assert not transcript_is_stop(heard("Return home now.", ("Return for now.", "Return home, Halt!")))  # said last
     assert not transcript_is_stop(heard("Go to the top.", ("Go to the stop.", "Go to the table and stop there.")))
 
 
