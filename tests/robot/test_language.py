@@ -395,12 +395,3 @@ def test_a_stop_said_with_words_that_are_elsewhere_cut_off_is_still_a_stop(world
 def test_what_you_will_see_there_is_a_look_and_tell(world) -> None:
     said = plan("walk to the table and tell me what you'll see", world)
     assert said == [("navigate_to", "living-room table"), ("look_around",), ("describe_scene",)]
-
-
-def test_coming_back_with_no_place_named_is_going_back_to_the_start(world) -> None:
-    assert plan("go to the counter and then come back", world) == [
-        ("navigate_to", "kitchen counter"),
-        ("go_home",),
-        ("say", "I am back where I started."),
-    ]
-    assert plan("go back to the kitchen", world)[0] == ("navigate_to", "kitchen counter")  # a place: not home

@@ -148,9 +148,7 @@ _HOME = (
     r"(?:(?:go|come|head|walk|return|get|run|move|drive)(?: on)?(?: back)?(?: to)? (?:home|your home|your start|"
     r"where you started|where you began|the start|the starting point|your starting (?:point|position|spot|place)|"
     r"your start position|base|the beginning|where you came from|where you started from|where you began|start|"
-    r"your starting point again)|home|back home|go home|"
-    # "go to the counter and then come back": back to where it started, with no place named
-    r"(?:come|go|head|walk|get|turn|run|drive) (?:right |straight )?back(?: again)?)"
+    r"your starting point again)|home|back home|go home)"
 )
 _ROOMS = phrases(
     (
