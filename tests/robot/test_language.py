@@ -83,6 +83,10 @@ def test_a_pose_keeps_its_commas_and_minus_signs_and_a_dash_between_words_ends_a
         ("pick up the apple and the mug", ["pick up the apple and the mug"]),
         ("say salt and pepper", ["say salt and pepper"]),
         ("go to the table next to the sofa", ["go to the table next to the sofa"]),
+        # a thing named first, with no comma before the step that says "it" of it
+        ("the apple put it on the table", ["the apple", "put it on the table"]),
+        ("that red bottle over there bring it here", ["that red bottle over there", "bring it here"]),
+        ("the man who picked it up", ["the man who picked it up"]),
     ],
 )
 def test_a_command_is_cut_into_its_steps_in_the_order_they_are_done(text: str, steps: list[str]) -> None:
@@ -191,6 +195,7 @@ def test_it_is_the_object_named_in_an_earlier_step_of_the_same_command(world) ->
         ("say", "I have put the green apple on the living-room table."),
     ]
     assert plan("the red mug, bring it to me", world)[2] == ("pick_object", "red mug")
+    assert plan("the apple put it on the table", world) == plan("the apple, put it on the table", world)
 
 
 def test_it_is_the_held_object_or_the_one_the_conversation_named(layout, world) -> None:

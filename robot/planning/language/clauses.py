@@ -13,6 +13,7 @@ from functools import cache
 
 from robot.planning.language.lexicon import (
     CLAUSE_VERBS,
+    DETERMINERS,
     FILLER_INFIXES,
     FILLER_PREFIXES,
     FILLER_SUFFIXES,
@@ -121,6 +122,10 @@ def _pieces(segment: Clause) -> list[tuple[Clause, str]]:
     # politeness is not cut here, but no step starts inside it ("do me a favour and put ...")
     start = i = len(words) - len(segment.without_prefixes().words)
     order = "now"
+    topic_end = _topic_before_pronoun_step(words, start)
+    if topic_end is not None:  # "the apple put it on the table": the thing named first is a step of its own
+        pieces.append((Clause(words[start:topic_end], segment.raw), order))
+        start = i = topic_end
     while i < len(words):
         rest = " ".join(t.text for t in words[i:])
         found = (_lead() if i == start else _joint()).match(rest)
@@ -143,6 +148,30 @@ def _pieces(segment: Clause) -> list[tuple[Clause, str]]:
         first, order = pieces[0]
         pieces[0] = (Clause((*polite, *first.words), segment.raw), order)
     return pieces
+
+
+# a thing named before the step that says "it" of it is at most this many words ("the big red mug on the counter")
+MAX_TOPIC_WORDS = 7
+_RELATIVE_WORDS = frozenset({"who", "which", "that", "whoever", "whatever", "to", "and", "i", "you", "we", "they"})
+
+
+def _topic_before_pronoun_step(words: tuple[Token, ...], start: int) -> int | None:
+    """Where the step starts after a thing named first without a comma ("the apple put it on the table", "that
+    bottle bring it here"): the words start with a determiner and a verb is followed by "it" or "them" a few
+    words on. A typed command often has no comma there, and a recogniser seldom writes one."""
+    if start >= len(words) or words[start].text not in DETERMINERS:
+        return None
+    for j in range(start + 2, min(start + MAX_TOPIC_WORDS, len(words) - 1) + 1):
+        if words[j - 1].text in _RELATIVE_WORDS:
+            return None  # "the man who picked it up": the verb is the thing's own, no step
+        if _pronoun_step().match(" ".join(t.text for t in words[j:])):
+            return j
+    return None
+
+
+@cache
+def _pronoun_step() -> re.Pattern[str]:
+    return re.compile(rf"(?:{verbs(*CLAUSE_VERBS)}) (?:it|them)\b")
 
 
 @cache
