@@ -190,9 +190,9 @@ def whisper_twice(world):
 def test_what_the_first_model_is_not_sure_of_is_heard_again_by_the_second(whisper, whisper_twice) -> None:
     from harness.spoken_cases import Voice, utterance
 
-    # a development-set recording of the speech bench's (noisy, seed 12): tiny.en hears "Head robot, ramped the
-    # apple for me." and is not sure of it
-    audio = utterance("hey robot, grab the apple for me", Voice("en-gb", 175), 10.0, 12)
+    # a development-set recording of the speech bench's (noisy, seed 14): tiny.en hears "Hey, robot, ramp the apple
+    # for me." and is not sure of it
+    audio = utterance("hey robot, grab the apple for me", Voice("en-us+f2", 140, 60), 10.0, 14)
     first = whisper.transcribe(audio)
     assert "grab the apple" not in first.text.lower() and not first.sure and not first.heard_again, first
     twice = whisper_twice.transcribe(audio)
@@ -276,12 +276,14 @@ def test_a_name_whispers_hints_put_in_place_of_what_was_said_is_not_sure_enough_
     from harness.spoken_cases import Voice, utterance
     from robot.speech.whisper import UNSURE_NAME_CONFIDENCE
 
-    # recordings of the speech bench's, clean (the development set's seed 363, the seventh held-out set's 353)
+    # recordings of the speech bench's, clean (the development set's seed 363, the first held-out set's 377)
     book = whisper.transcribe(utterance("pick up the book", Voice("en-gb", 175), None, 363))
     assert "mug" in book.text.lower() and book.unsure_names == ("mug",), book
     assert not book.sure and book.confidence <= UNSURE_NAME_CONFIDENCE, book
-    towel = whisper.transcribe(utterance("bring me a towel", Voice("en-us+max", 155), None, 353))
-    assert "apple" in towel.text.lower() and towel.unsure_names == ("apple",) and not towel.sure, towel
+    garage = whisper.transcribe(
+        utterance("take the apple to the garage", Voice("en-gb-scotland+m3", 150, 45), None, 377)
+    )
+    assert "bottle" in garage.text.lower() and garage.unsure_names == ("bottle",) and not garage.sure, garage
     right = whisper.transcribe(utterance("bring the red mug to the table", Voice("en-gb", 175), None, 363))
     assert right.text.lower().rstrip(".") == "bring the red mug to the table", right
     assert right.sure and right.unsure_names == (), right
@@ -306,6 +308,31 @@ def test_a_misheard_command_is_read_from_the_next_wording_whisper_heard(whisper)
     wording, planned = first_readable(planner, heard.alternatives, context)
     assert "fetch the coffee cup" in wording.lower()
     assert ("pick_object", "red mug") in [(s.action, s.args.get("object")) for s in planned.plan.steps]
+
+
+def test_a_command_is_read_in_a_ten_second_window_and_a_word_or_two_or_a_long_speech_in_the_whole_one() -> None:
+    from robot.speech.whisper import window_frames
+
+    full, per_second = 3000, 100  # whisper's 30 s window in feature frames, 100 frames a second
+    assert window_frames(250, full, per_second) == 1000  # a 2.5 s command: 10 s
+    assert window_frames(120, full, per_second) == full  # "stop!": the window whisper was trained on
+    assert window_frames(1200, full, per_second) == full  # longer than the short window
+    assert window_frames(250, full, per_second) % 2 == 0  # the encoder's convolution halves it
+
+
+def test_a_sentence_written_twice_in_a_row_is_kept_once_and_other_sentences_are_left_alone() -> None:
+    from robot.speech.whisper import without_repeats
+
+    assert without_repeats("What do you see? What do you see?") == "What do you see?"
+    assert without_repeats("Go home. go home!") == "Go home."
+    assert without_repeats("Go to the table. Then go home.") == "Go to the table. Then go home."
+    assert without_repeats("Stop, stop, stop!") == "Stop, stop, stop!"  # one sentence: words said again stay
+    assert without_repeats("") == ""
+
+
+def test_a_command_read_in_the_short_window_is_heard_word_for_word(whisper) -> None:
+    audio = synthesize_audio("take the apple to the table", "en-us", 160)
+    assert whisper.transcribe(audio).text.lower().rstrip(".") == "take the apple to the table"
 
 
 def test_whispers_alternatives_are_the_other_wordings_near_the_best_once_each() -> None:
