@@ -400,3 +400,17 @@ def test_a_stop_said_with_words_that_are_elsewhere_cut_off_is_still_a_stop(world
 def test_what_you_will_see_there_is_a_look_and_tell(world) -> None:
     said = plan("walk to the table and tell me what you'll see", world)
     assert said == [("navigate_to", "living-room table"), ("look_around",), ("describe_scene",)]
+
+
+@pytest.mark.parametrize("text", ["i could use the apple", "I could do with the apple", "I wanted the apple."])
+def test_saying_you_could_use_a_thing_asks_for_it(world, text: str) -> None:
+    assert plan(text, world)[:3] == FETCH_APPLE
+
+
+def test_charging_at_the_dock_is_going_there_but_no_other_place_charges(world) -> None:
+    assert plan("go and charge at the dock", world)[0] == ("navigate_to", "charging dock")
+    assert plan("recharge on the charging station", world)[0] == ("navigate_to", "charging dock")
+    with pytest.raises(PlanningError):
+        plan("go charge at the table", world)
+    with pytest.raises(PlanningError, match="sandwich"):
+        plan("i could use a sandwich", world)

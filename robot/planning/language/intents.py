@@ -22,6 +22,7 @@ from robot.planning.language.lexicon import (
     MORE_NUMBER_WORDS,
     NUMBER_WORDS,
     PICK_VERBS,
+    PLACE_WORDS,
     SAY_VERBS,
     TELL_VERBS,
     WAIT_VERBS,
@@ -167,7 +168,8 @@ _LOOK = (
     rf"survey (?:your surroundings|{_ROOMS})|have a look round"
 )
 _CHARGE = (
-    r"(?:go |go and |go to |come )?(?:re)?charge(?: yourself| up| your batter(?:y|ies)| itself)?|"
+    r"(?:go |go and |go to |come )?(?:re)?charge(?: yourself| up| your batter(?:y|ies)| itself)?"
+    rf"(?: (?:at|on|by) (?:the |your )?(?:{phrases(PLACE_WORDS['dock'])}))?|"
     r"(?:go )?dock(?: yourself)?|go (?:re)?charge"
 )
 # the little words between a verb and a place, longest first ("on top of" before "on")
@@ -349,7 +351,8 @@ def _shapes() -> tuple[tuple[re.Pattern[str], Build], ...]:
             _carry,
         ),
         (
-            r"(?:i want|i need|i would like|i would love|can i have|may i have|can i get|could i have|could i get|"
+            r"(?:i want|i wanted|i need|i would like|i would love|i could use|i could do with|can i have|may i have|"
+            r"can i get|could i have|could i get|"
             r"i will have|i will take|give me|i want to have|i would like to have|can i please have|could i please "
             rf"have) (?P<thing>.+?)(?: {_SOURCE} (?P<source>.+?))?",
             _hand_over,
