@@ -286,7 +286,7 @@ class _Beam:
 
         model = self._model
         extractor = model.feature_extractor
-        features = model.feature_extractor(samples)[..., :-1]
+        features = extractor(samples)[..., :-1]
         frames = min(features.shape[-1], extractor.nb_max_frames)
         width = window_frames(frames, extractor.nb_max_frames, extractor.sampling_rate // extractor.hop_length)
         encoded = model.encode(pad_or_trim(features[:, :width], width))

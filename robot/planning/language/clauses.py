@@ -152,7 +152,11 @@ def _pieces(segment: Clause) -> list[tuple[Clause, str]]:
 
 # a thing named before the step that says "it" of it is at most this many words ("the big red mug on the counter")
 MAX_TOPIC_WORDS = 7
-_RELATIVE_WORDS = frozenset({"who", "which", "that", "whoever", "whatever", "to", "and", "i", "you", "we", "they"})
+# a word before the verb that makes it the thing's own, or someone else's ("the man who picked it up", "the apple
+# you put it on"): no step starts there
+_VERB_NOT_A_STEP_AFTER = frozenset(
+    {"who", "which", "that", "whoever", "whatever", "to", "and", "i", "you", "we", "they"}
+)
 
 
 def _topic_before_pronoun_step(words: tuple[Token, ...], start: int) -> int | None:
@@ -162,7 +166,7 @@ def _topic_before_pronoun_step(words: tuple[Token, ...], start: int) -> int | No
     if start >= len(words) or words[start].text not in DETERMINERS:
         return None
     for j in range(start + 2, min(start + MAX_TOPIC_WORDS, len(words) - 1) + 1):
-        if words[j - 1].text in _RELATIVE_WORDS:
+        if words[j - 1].text in _VERB_NOT_A_STEP_AFTER:
             return None  # "the man who picked it up": the verb is the thing's own, no step
         if _pronoun_step().match(" ".join(t.text for t in words[j:])):
             return j

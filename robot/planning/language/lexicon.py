@@ -69,15 +69,16 @@ FILLER_PREFIXES = word_list("""
     on you go, it is time to, time to, now it is time to, it is time for you to,
     once done, when that is done, when finished""")
 FILLER_SUFFIXES = word_list("""
-    if you do not mind, when you get a chance, when you can, if you can, if you could, thank you very much, thanks a
-    lot, thank you, thanks, cheers, please, for me, for us, right now, right away, immediately, at once, quickly, now,
-    anyway, anyways, robot, buddy, mate, pal, would you, will you, could you, ok, okay, first, too, as well, and then,
-    and, then, if possible, if you would, yeah, pls, plz, without stopping, without a stop, without pausing, without a
-    break, non stop, nonstop, in one go, without stopping on the way, without stopping anywhere, do not stop, do not
-    stop for anything, do not stop on the way, do not stop along the way, do not stop anywhere, and do not stop, no
-    stopping, no stops, do not stop until you have it, do not stop until you get it, do not stop until you are done, do
-    not stop until you get there, do not stop until you are there, and do not stop until you have it, and do not stop
-    until you get it, and do not stop until you are done""")
+    if you do not mind, when you get a chance, when you can, if you can, if you could, thank you very much,
+    thanks a lot, thank you, thanks, cheers, please, for me, for us, right now, right away, immediately, at once,
+    quickly, now, anyway, anyways, robot, buddy, mate, pal, would you, will you, could you, ok, okay, first, too,
+    as well, and then, and, then, if possible, if you would, yeah, pls, plz, without stopping, without a stop,
+    without pausing, without a break, non stop, nonstop, in one go, without stopping on the way,
+    without stopping anywhere, do not stop, do not stop for anything, do not stop on the way, do not stop along the way,
+    do not stop anywhere, and do not stop, no stopping, no stops, do not stop until you have it,
+    do not stop until you get it, do not stop until you are done, do not stop until you get there,
+    do not stop until you are there, and do not stop until you have it, and do not stop until you get it,
+    and do not stop until you are done""")
 # said anywhere in a request without changing it ("bring the mug for me to the table")
 FILLER_INFIXES = word_list("please, for me, for us, kindly")
 # what joins two steps said one after the other
