@@ -1220,6 +1220,77 @@ HELDOUT15 = SpokenSet(
     ),
 )
 
+HELDOUT16 = SpokenSet(
+    name="heldout16",
+    # written at stop 85, before anything of that stop was measured on it, and only measured
+    voices=(
+        Voice("en-us+gustave", 155),
+        Voice("en-gb-x-rp+pedro", 160, 45),
+        Voice("en-gb-scotland+Henrique", 150, 55),
+        Voice("en-us-nyc+steph2", 165, 50),
+    ),
+    commands=(
+        Case("could you get me the bottle", fetch(BOTTLE)),
+        Case("i need the red mug please", fetch(MUG)),
+        Case("fetch the apple for me", fetch(APPLE)),
+        Case("bring over the water bottle", fetch(BOTTLE)),
+        Case("make your way to the counter", go(COUNTER)),
+        Case("go to the charger", go(DOCK)),
+        Case("walk over to the coffee table", go(TABLE)),
+        Case("take the apple to the kitchen", carry(APPLE, COUNTER)),
+        Case("place the mug on the table", carry(MUG, TABLE)),
+        Case("move the bottle to the dock", carry(BOTTLE, DOCK)),
+        Case("search for the bottle", find(BOTTLE)),
+        Case("do you know where the mug is", find(MUG)),
+        Case("take a look around", LOOK),
+        Case("describe what you see", LOOK_AND_TELL),
+        Case("head back to the start", HOME),
+        Case("go back to your starting position", HOME),
+        Case("grab the apple and bring it to the table", carry(APPLE, TABLE)),
+        Case("go to the table and then the counter", seq(go(TABLE), go(COUNTER))),
+        Case("say thank you", say("thank you")),
+        Case("let everyone know that the meeting is starting", say("the meeting is starting")),
+        Case("wait two seconds", wait("2")),
+        Case("pause for three seconds", wait("3")),
+        Case("okay robot, walk to the counter", go(COUNTER)),
+        Case("would you mind fetching the mug", fetch(MUG)),
+        Case("drop it off at the dock", carry(APPLE, DOCK, held=True), held=APPLE),
+        Case("bring it over here", fetch(BOTTLE), history=(("find the bottle", find(BOTTLE)),)),
+        Case("the mug, bring it to the counter", carry(MUG, COUNTER)),
+        Case("first go to the counter, then look around", seq(go(COUNTER), LOOK)),
+    ),
+    stops=(
+        "stop",
+        "stop now",
+        "halt",
+        "freeze",
+        "robot, freeze",
+        "emergency stop please",
+        "stop, stop, stop",
+        "halt right there",
+        "freeze right now",
+        "okay robot, stop",
+        "please stop",
+        "stop it",
+    ),
+    with_stop=(
+        Case("go to the table and stop there", go(TABLE)),
+        Case("drive to the dock, then stop", go(DOCK)),
+        Case("fetch the bottle without stopping", fetch(BOTTLE)),
+        Case("don't stop until you get to the counter", go(COUNTER)),
+    ),
+    out_of_world=(
+        "bring me my keys",
+        "go upstairs",
+        "close the door",
+        "make me a coffee",
+        "put the bottle in the dishwasher",
+        "dance for me",
+        "text my sister",
+        "mop the kitchen floor",
+    ),
+)
+
 
 SETS: dict[str, SpokenSet] = {
     s.name: s
@@ -1240,6 +1311,7 @@ SETS: dict[str, SpokenSet] = {
         HELDOUT13,
         HELDOUT14,
         HELDOUT15,
+        HELDOUT16,
     )
 }
 
