@@ -284,7 +284,8 @@ def test_a_name_whispers_hints_put_in_place_of_what_was_said_is_not_sure_enough_
         utterance("take the apple to the garage", Voice("en-gb-scotland+m3", 150, 45), None, 377)
     )
     assert "bottle" in garage.text.lower() and garage.unsure_names == ("bottle",) and not garage.sure, garage
-    right = whisper.transcribe(utterance("bring the red mug to the table", Voice("en-gb", 175), None, 363))
+    # (in Voice("en-gb", 175) the mug's evidence sits at the threshold: sure on one machine, not on another)
+    right = whisper.transcribe(utterance("bring the red mug to the table", Voice("en-us", 160), None, 363))
     assert right.text.lower().rstrip(".") == "bring the red mug to the table", right
     assert right.sure and right.unsure_names == (), right
 
