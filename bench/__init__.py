@@ -70,8 +70,12 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
         )
     elif suite == "speech":
         from bench.spoken import run_speech
+        from harness.spoken_cases import SETS
 
-        sets = tuple(s.strip() for s in args.sets.split(",") if s.strip())
+        sets = tuple(SETS) if args.sets == "all" else tuple(s.strip() for s in args.sets.split(",") if s.strip())
+        unknown = [name for name in sets if name not in SETS]
+        if unknown:
+            raise SystemExit(f"unknown spoken set(s) {', '.join(unknown)}; known: {', '.join(SETS)}")
         engines = tuple(e.strip() for e in args.engines.split(",") if e.strip())
         result = run_speech(
             sets=sets,

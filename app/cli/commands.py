@@ -575,8 +575,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     bench.add_argument(
         "--sets",
-        default="dev,heldout,heldout2,heldout3,heldout4,heldout5,heldout6,heldout7,heldout8,heldout9,heldout10,heldout11,heldout12,heldout13,heldout14,heldout15,heldout16",
-        help="speech: spoken sets (dev, heldout, heldout2 ... heldout16), comma-separated",
+        default="all",
+        help="speech: spoken sets (dev, heldout, heldout2 ...), comma-separated; all of them unless told",
     )
     bench.add_argument(
         "--whisper-model",
