@@ -1292,6 +1292,78 @@ HELDOUT16 = SpokenSet(
 )
 
 
+HELDOUT17 = SpokenSet(
+    name="heldout17",
+    # written at stop 86, before anything of that stop was measured on it, and only measured
+    voices=(
+        Voice("en-us+Diogo", 160),
+        Voice("en-gb-x-rp+Steph3", 155, 55),
+        Voice("en-gb-x-gbclan+male3", 150, 45),
+        Voice("en-029+Gene2", 165, 50),
+    ),
+    commands=(
+        Case("can i have the apple please", fetch(APPLE)),
+        Case("please get me the mug", fetch(MUG)),
+        Case("hand me the water bottle", fetch(BOTTLE)),
+        Case("could you bring me the cup", fetch(MUG)),
+        Case("go over to the kitchen counter", go(COUNTER)),
+        Case("walk to the charging station", go(DOCK)),
+        Case("head over to the living room table", go(TABLE)),
+        Case("hey robot, go to the table", go(TABLE)),
+        Case("carry the mug to the kitchen", carry(MUG, COUNTER)),
+        Case("put the apple on the counter", carry(APPLE, COUNTER)),
+        Case("bring the bottle to the coffee table", carry(BOTTLE, TABLE)),
+        Case("get the bottle and put it on the counter", carry(BOTTLE, COUNTER)),
+        Case("find the red mug", find(MUG)),
+        Case("where is the apple", find(APPLE)),
+        Case("look around the room", LOOK),
+        Case("what can you see", LOOK_AND_TELL),
+        Case("return to where you started", HOME),
+        Case("go home", HOME),
+        Case("go to the dock and then come back to the start", seq(go(DOCK), HOME)),
+        Case("look around first, then go to the dock", seq(LOOK, go(DOCK))),
+        Case("say hello everybody", say("hello everybody")),
+        Case("tell everyone that lunch is ready", say("lunch is ready")),
+        Case("wait for four seconds", wait("4")),
+        Case("wait one second", wait("1")),
+        Case("put it down on the table", carry(BOTTLE, TABLE, held=True), held=BOTTLE),
+        Case("go get it", fetch(MUG), history=(("find the mug", find(MUG)),)),
+        Case("the bottle, take it to the dock", carry(BOTTLE, DOCK)),
+        Case("um, could you fetch the apple for me", fetch(APPLE)),
+    ),
+    stops=(
+        "stop",
+        "halt now",
+        "freeze",
+        "robot stop",
+        "emergency stop",
+        "stop right now",
+        "hey robot, halt",
+        "please freeze",
+        "stop the robot",
+        "stop, stop",
+        "halt immediately",
+        "stop everything",
+    ),
+    with_stop=(
+        Case("walk to the counter and stop there", go(COUNTER)),
+        Case("go to the table, then stop", go(TABLE)),
+        Case("bring me the apple without stopping", fetch(APPLE)),
+        Case("keep walking to the dock, don't stop", go(DOCK)),
+    ),
+    out_of_world=(
+        "make my bed",
+        "turn on the tv",
+        "bring me a banana",
+        "go to the garage",
+        "open the fridge",
+        "water the plants",
+        "call my mom",
+        "jump up and down",
+    ),
+)
+
+
 SETS: dict[str, SpokenSet] = {
     s.name: s
     for s in (
@@ -1312,6 +1384,7 @@ SETS: dict[str, SpokenSet] = {
         HELDOUT14,
         HELDOUT15,
         HELDOUT16,
+        HELDOUT17,
     )
 }
 
