@@ -212,6 +212,19 @@ def stop_first_then_nothing_asked(text: str) -> bool:
     )
 
 
+# "Walk to the counter, then stop.", heard word for word, had "Walk to the counter, stop." beside it (the fifteenth
+# spoken set, stop 86): the other wording dropped the "then" that made the stop where the walk ends. When the
+# transcript reads a stop word after a word that makes it part of something else, no other wording overrides that.
+# Only the words that join a step to the one before: a "not" in the transcript can be a misheard "on," ("Okay, move,
+# not stop." for "okay, move on, stop", stop 80).
+_STOP_WORD_AFTER = re.compile(r"\b(?:then|and) (?:stop|halt|freeze)\b")
+
+
+def stop_read_as_part_of_a_command(text: str) -> bool:
+    """A stop word the transcript puts after "then" or "and": a step after the one before ("..., then stop")."""
+    return bool(_STOP_WORD_AFTER.search(" ".join(normalize(text).split())))
+
+
 def transcript_is_stop(transcript: Transcript) -> bool:
     """The transcript, or one of the other wordings the recogniser heard nearly as likely, is a stop utterance or
     ends with one; or the transcript is a stop with its first or last words misheard (`two_words_stop`,
@@ -220,7 +233,11 @@ def transcript_is_stop(transcript: Transcript) -> bool:
     the other wordings added 5 of 96 stops on the development set and 6 on the first held-out set, and no false stop
     on their 512 ordinary commands. A short utterance (one a stop with a few words can be) is also a stop when a
     wording further down the beam is one, or when it starts with a stop and asks for nothing after it."""
-    if any(ends_with_stop(wording) for wording in (transcript.text, *transcript.alternatives)):
+    if ends_with_stop(transcript.text):
+        return True
+    if stop_read_as_part_of_a_command(transcript.text):
+        return False
+    if any(ends_with_stop(wording) for wording in transcript.alternatives):
         return True
     if (
         two_words_stop(transcript.text)

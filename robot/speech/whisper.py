@@ -23,6 +23,7 @@ import math
 import re
 import threading
 import time
+import unicodedata
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -362,15 +363,24 @@ def heard_twice(first: list[Hypothesis], second: list[Hypothesis]) -> tuple[str,
     kept = []
     for text in texts:
         words = normalize(text)
-        if words and words not in seen:
+        if words and words not in seen and in_latin_script(text):
             seen.add(words)
             kept.append(text)
+    if not kept:  # every wording in another script: the likeliest stands, with nothing beside it
+        return texts[0] if texts else "", ()
     return kept[0], tuple(kept[1:])
+
+
+def in_latin_script(text: str) -> bool:
+    """No letter of another script: the multilingual model drifting into another language wrote "Walk to the
+    counter,您 stop!" for "walk to the counter, then stop" (the fifteenth spoken set, stop 86), and with the unread
+    word dropped that wording is a stop. Such a wording is not a reading of English, so it is no alternative."""
+    return all(not char.isalpha() or unicodedata.name(char, "").startswith("LATIN") for char in text)
 
 
 def alternatives(hypotheses: list[Hypothesis], margin: float = ALTERNATIVE_MARGIN) -> tuple[str, ...]:
     """The other wordings within `margin` of the likeliest's score, likeliest first, each once (a wording that
-    differs from one before it only in punctuation or case is the same)."""
+    differs from one before it only in punctuation or case is the same), none in another script."""
     if not hypotheses:
         return ()
     best = hypotheses[0].score
@@ -378,7 +388,7 @@ def alternatives(hypotheses: list[Hypothesis], margin: float = ALTERNATIVE_MARGI
     kept = []
     for hypothesis in hypotheses[1:]:
         words = normalize(hypothesis.text)
-        if best - hypothesis.score <= margin and words and words not in seen:
+        if best - hypothesis.score <= margin and words and words not in seen and in_latin_script(hypothesis.text):
             seen.add(words)
             kept.append(hypothesis.text)
     return tuple(kept)
@@ -395,7 +405,7 @@ def further_wordings(
         best = hypotheses[0].score if hypotheses else 0.0
         for hypothesis in hypotheses[1:]:
             words = normalize(hypothesis.text)
-            if best - hypothesis.score <= margin and words and words not in seen:
+            if best - hypothesis.score <= margin and words and words not in seen and in_latin_script(hypothesis.text):
                 seen.add(words)
                 kept.append(hypothesis.text)
     return tuple(kept)

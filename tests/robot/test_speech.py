@@ -221,6 +221,8 @@ def test_a_second_hearing_puts_the_second_models_wordings_first_then_the_firsts_
         ("Hey robot, grab the apples.", "Head robot, ramped the apple."),
     )
     assert heard_twice([Hypothesis("", -1.0, -1.0)], second[:1]) == ("Hey robot, grab the apple.", ())
+    drifted = [Hypothesis("嘿机器人", -0.1, -0.1), *second]  # the multilingual model's likeliest, in another script
+    assert heard_twice(first, drifted) == heard_twice(first, second)
 
 
 def test_the_second_model_is_joined_from_its_two_packages_once_and_can_be_turned_off(tmp_path, monkeypatch) -> None:
@@ -350,6 +352,22 @@ def test_whispers_alternatives_are_the_other_wordings_near_the_best_once_each() 
     assert alternatives(beam[:1]) == () and alternatives([]) == ()
 
 
+def test_a_wording_in_another_script_is_no_alternative_and_cannot_make_a_command_a_stop() -> None:
+    from robot.speech.asr import Transcript
+    from robot.speech.stop_word import transcript_is_stop
+    from robot.speech.whisper import Hypothesis, alternatives, further_wordings
+
+    beam = [
+        Hypothesis("Walk to the counter, then stop.", -0.10, -0.1),
+        Hypothesis("Walk to the counter,\u60a8 stop!", -0.20, -0.2),  # the multilingual model's drift
+        Hypothesis("Walk to the café, then stop.", -0.25, -0.2),  # a Latin letter stays readable
+    ]
+    assert alternatives(beam) == ("Walk to the café, then stop.",)
+    assert further_wordings([beam], ("Walk to the counter, then stop.",)) == ("Walk to the café, then stop.",)
+    heard = Transcript(beam[0].text, 0.9, "whisper", False, 2.0, 0.3, alternatives=alternatives(beam))
+    assert not transcript_is_stop(heard)
+
+
 @pytest.fixture(scope="module")
 def spotter(world):
     from robot.speech.stop_word import StopSpotter
@@ -468,6 +486,11 @@ def test_a_stop_heard_as_the_recognisers_second_wording_is_still_a_stop() -> Non
     assert transcript_is_stop(heard("Stop!"))
     assert not transcript_is_stop(heard("Head to the dock.", "Head to the dock and stop there."))
     assert not transcript_is_stop(heard("Go to the top.", "Go to the stop."))
+    # a stop the transcript reads as the end of a walk is not made a stop by a wording that dropped the "then"
+    assert not transcript_is_stop(heard("Walk to the counter, then stop.", "Walk to the counter, stop."))
+    assert not transcript_is_stop(heard("Go to the dock and stop.", "Go to the dock. Stop."))
+    assert transcript_is_stop(heard("Walk to the counter, stop.", "Walk to the counter, then stop."))
+    assert transcript_is_stop(heard("Immersion should stop right now.", "Emergency stop right now."))
 
 
 def test_a_stop_after_one_word_whisper_did_not_catch_is_a_stop_but_dont_stop_and_say_stop_are_not() -> None:
