@@ -7,6 +7,7 @@ LLM words it its own way) but it must say something.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -178,7 +179,7 @@ def plan_matches(expected: Seed, actual: list[dict[str, Any]]) -> bool:
             if value == "*":
                 if not str(got.get(key, "")).strip():
                     return False
-            elif normalise_text(str(got.get(key, ""))) != normalise_text(value):
+            elif said_aloud(str(got.get(key, ""))) != said_aloud(value):
                 return False
         if set(got) - set(want):
             return False
@@ -188,6 +189,16 @@ def plan_matches(expected: Seed, actual: list[dict[str, Any]]) -> bool:
 def normalise_text(text: str) -> str:
     """As said aloud: case, closing punctuation and the space in "good night" / "goodnight" make no difference."""
     return "".join(text.lower().strip().rstrip(".!").replace("-", " ").split())
+
+
+def said_aloud(text: str) -> str:
+    """An argument as the robot would say or use it: `normalise_text`, and no punctuation inside either (the comma in
+    "hello, everybody" is not said; the point in "2.5" is kept). Case texts keep their commas apart (`normalise_text`):
+    to the planner a comma can end a clause."""
+    return normalise_text(_UNSPOKEN_PUNCTUATION.sub("", text))
+
+
+_UNSPOKEN_PUNCTUATION = re.compile(r"[,;:!?]|\.(?!\d)")
 
 
 class Asked(Protocol):

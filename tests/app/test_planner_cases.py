@@ -40,3 +40,8 @@ def test_a_said_text_matches_however_it_is_spelt_aloud_but_not_other_words() -> 
     assert plan_matches(expected, [{"action": "say", "text": "Goodnight!"}])
     assert plan_matches(expected, [{"action": "say", "text": "Good-night."}])
     assert not plan_matches(expected, [{"action": "say", "text": "good light"}])
+    # a comma inside is not said ("Say hello, everybody!" as whisper writes it), but the words still count
+    hello = [{"action": "say", "text": "hello everybody"}]
+    assert plan_matches(hello, [{"action": "say", "text": "hello, everybody"}])
+    assert not plan_matches(hello, [{"action": "say", "text": "hello every party"}])
+    assert not plan_matches([{"action": "wait", "seconds": "2.5"}], [{"action": "wait", "seconds": "25"}])
