@@ -210,7 +210,7 @@ class _Composer:
 
     def _named_after(self, requests: list[Request]) -> list[Request]:
         """ "bring me something to drink, the bottle", "get it, the red mug": an object named on its own right after
-        a request whose thing names no one object is that thing."""
+        a request whose thing names no one object is that thing; so is one a fetch names right after a vague one."""
         named: list[Request] = []
         for request in requests:
             previous = named[-1] if named else None
@@ -225,6 +225,15 @@ class _Composer:
                 else:
                     named[-1] = replace(previous, thing=request.thing)
                     continue
+            if (
+                request.action == "fetch"
+                and previous is not None
+                and previous.action == "fetch"
+                and _VAGUE_HEAD.fullmatch((previous.thing or "").strip())
+                and self._one_object(request.thing) is not None
+            ):  # "I'd love a drink, grab the water bottle": the fetch that names it says which drink
+                named[-1] = replace(request, to_me=previous.to_me or request.to_me)
+                continue
             named.append(request)
         return named
 

@@ -275,6 +275,9 @@ def test_an_object_named_after_a_vague_request_is_the_one_fetched_but_nothing_is
     assert plan("bring it to me, the water bottle", world) == fetch_bottle
     with pytest.raises(ClarificationNeeded):
         plan("bring me something to drink", world)
+    assert plan("I'd love a drink, grab the water bottle please", world)[:3] == fetch_bottle[:3]  # this drink
+    with pytest.raises(PlanningError, match="holding the red mug"):  # two things named are not one drink
+        plan("bring me the mug, grab the bottle", world)
     for out_of_world in ("bring me something to drink, the lemonade", "bring me something to drink the banana"):
         with pytest.raises(PlanningError) as refused:
             plan(out_of_world, world)
@@ -386,6 +389,8 @@ def test_words_before_a_request_that_change_or_add_to_it_are_not_skipped(said: s
         ("don't stop until you reach the table", "living-room table"),
         ("keep walking till you get to the dock", "charging dock"),
         ("walk to the table without stopping", "living-room table"),  # how, not where
+        ("carry on to the counter without stopping", "kitchen counter"),  # carrying nothing: going on
+        ("fetch the apple and never stop on the way", "kitchen counter"),
     ],
 )
 def test_a_stop_word_inside_a_walk_is_part_of_the_walk(said: str, place: str, world) -> None:
@@ -414,3 +419,12 @@ def test_charging_at_the_dock_is_going_there_but_no_other_place_charges(world) -
         plan("go charge at the table", world)
     with pytest.raises(PlanningError, match="sandwich"):
         plan("i could use a sandwich", world)
+
+
+def test_a_look_then_describe_it_is_a_look_and_tell_and_hang_on_asks_for_nothing(world) -> None:
+    assert plan("have a look around and describe it", world) == [("look_around",), ("describe_scene",)]
+    assert plan("hang on, wait thirty seconds", world) == [("wait", "30")]
+    assert plan("hold on a minute", world) == [("wait", "60")]  # a wait still, with its length
+    assert plan("carry the mug on to the counter", world)[-2] == ("place_object", "kitchen counter")
+    with pytest.raises(PlanningError):
+        plan("hang on", world)  # nothing asked

@@ -143,7 +143,8 @@ _LOOK_AND_TELL = (
     r"(?:(?:what|which objects|what things) (?:do|can) you (?:see|spot|make out)|"
     r"what you (?:can |will |would )?(?:see|spot)|"
     rf"what are you seeing|what is (?:around|near|in front of|close to)(?: you| here)?|what have you seen|"
-    rf"what can you spot|the scene|your surroundings|what you are seeing|what is there){_AROUND}"
+    rf"what can you spot|the scene|your surroundings|what you are seeing|what is there){_AROUND}|"
+    r"describe (?:it|that|everything|all of it|the room)"  # after a look: "have a look around and describe it"
 )
 _HOME = (
     r"(?:(?:go|come|head|walk|return|get|run|move|drive)(?: on)?(?: back)?(?: to)? (?:home|your home|your start|"
@@ -205,8 +206,9 @@ def _hand_over(m: re.Match[str], clause: Clause) -> Step:
 
 def _go(m: re.Match[str], clause: Clause) -> Step:
     """A walk to a place named in words, or to a pose ("1.2, 0.5, 90 deg": its punctuation is kept)."""
-    raw = clause.raw_of(m.start("place"), m.end("place"))
-    return Step("go", place=raw if parse_pose_goal(raw) is not None else m.group("place"))
+    group = "place2" if m.groupdict().get("place2") else "place"  # (a shape said two ways)
+    raw = clause.raw_of(m.start(group), m.end(group))
+    return Step("go", place=raw if parse_pose_goal(raw) is not None else m.group(group))
 
 
 def _carry(m: re.Match[str], clause: Clause) -> Step:
@@ -246,6 +248,8 @@ def _shapes() -> tuple[tuple[re.Pattern[str], Build], ...]:
             r"there|ready)",
             lambda m, c: Step("nothing"),
         ),
+        # "hang on, wait thirty seconds": a word to hold the robot's attention before the request, asking nothing
+        (r"hang on|hold on|hang about", lambda m, c: Step("nothing")),
         (_LOOK_AND_TELL, lambda m, c: Step("look_and_tell")),
         (_HOME, lambda m, c: Step("home")),
         (_LOOK, lambda m, c: Step("look")),
@@ -264,10 +268,11 @@ def _shapes() -> tuple[tuple[re.Pattern[str], Build], ...]:
             _go,
         ),
         (rf"(?:make|find) your way(?: {_AWAY})? {_GO_TO} (?P<place>.+)", _go),
-        # "keep going to the counter", "carry on walking over to the dock"
+        # "keep going to the counter", "carry on walking over to the dock", "carry on to the counter"
         (
             r"(?:keep|carry on|continue)(?: on)? (?:going|walking|moving|heading|driving)(?: on| straight| right)?"
-            rf"(?: over)? {_GO_TO} (?P<place>.+)",
+            rf"(?: over)? {_GO_TO} (?P<place>.+)|(?:carry on|keep on|continue on|go on|move on)(?: over)? {_GO_TO} "
+            r"(?P<place2>.+)",
             _go,
         ),
         (

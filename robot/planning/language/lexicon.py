@@ -78,7 +78,8 @@ FILLER_SUFFIXES = word_list("""
     do not stop anywhere, and do not stop, no stopping, no stops, do not stop until you have it,
     do not stop until you get it, do not stop until you are done, do not stop until you get there,
     do not stop until you are there, and do not stop until you have it, and do not stop until you get it,
-    and do not stop until you are done""")
+    and do not stop until you are done, never stop, never stop on the way, never stop along the way,
+    never stop anywhere, never stop for anything, and never stop, and never stop on the way""")
 # said anywhere in a request without changing it ("bring the mug for me to the table")
 FILLER_INFIXES = word_list("please, for me, for us, kindly")
 # what joins two steps said one after the other
