@@ -45,6 +45,7 @@ from robot.planning.world_context import normalize
 from robot.speech.asr import Transcript
 from robot.speech.audio import Audio
 from robot.speech.sphinx import PocketSphinxASR, fit_per_s, grammar_decoder, phone_loop_decoder
+from robot.speech.whisper import in_latin_script
 
 STOP_PHRASES = ("stop", "halt", "freeze", "robot stop", "emergency stop")
 # Keyphrase thresholds (pocketsphinx compares the phrase's path score against a phone loop with them): loose
@@ -237,7 +238,10 @@ def transcript_is_stop(transcript: Transcript) -> bool:
         return True
     if stop_read_as_part_of_a_command(transcript.text):
         return False
-    if any(ends_with_stop(wording) for wording in transcript.alternatives):
+    # a wording with a word in another script is not read for a stop: the drifted word may be the one that made the
+    # stop part of a command ("Walk to the counter,您 stop!" for "walk to the counter, then stop")
+    others = tuple(w for w in transcript.alternatives if in_latin_script(w))
+    if any(ends_with_stop(wording) for wording in others):
         return True
     if (
         two_words_stop(transcript.text)
@@ -247,7 +251,7 @@ def transcript_is_stop(transcript: Transcript) -> bool:
         return True
     if transcript.audio_s > MAX_STOP_UTTERANCE_S:
         return False
-    further = covering(transcript.further_wordings, transcript.text)
+    further = covering(tuple(w for w in transcript.further_wordings if in_latin_script(w)), transcript.text)
     return stop_first_then_nothing_asked(transcript.text) or any(
         is_stop_utterance(wording) or two_words_stop(wording) for wording in further
     )

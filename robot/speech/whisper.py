@@ -359,28 +359,32 @@ def heard_twice(first: list[Hypothesis], second: list[Hypothesis]) -> tuple[str,
     texts = [second[0].text, *alternatives(second), first[0].text, *alternatives(first)] if first[0].text else []
     if not texts:
         texts = [second[0].text, *alternatives(second)]
-    seen: set[str] = set()
-    kept = []
+    kept: list[str] = []
+    where: dict[str, int] = {}  # a wording's words -> its place in `kept`
     for text in texts:
         words = normalize(text)
-        if words and words not in seen and in_latin_script(text):
-            seen.add(words)
+        if not words:
+            continue
+        if words not in where:
+            where[words] = len(kept)
             kept.append(text)
-    if not kept:  # every wording in another script: the likeliest stands, with nothing beside it
-        return texts[0] if texts else "", ()
-    return kept[0], tuple(kept[1:])
+        elif in_latin_script(text) and not in_latin_script(kept[where[words]]):
+            kept[where[words]] = text  # the same words, without the drifted one
+    # the transcript is the first wording all in English letters: the multilingual model can drift into another
+    # script for a word; such a wording stays an alternative, in its place ("都 hold on for four seconds.")
+    first = next((i for i, text in enumerate(kept) if in_latin_script(text)), 0)
+    return (kept[first], tuple(kept[:first] + kept[first + 1 :])) if kept else ("", ())
 
 
 def in_latin_script(text: str) -> bool:
     """No letter of another script: the multilingual model drifting into another language wrote "Walk to the
-    counter,您 stop!" for "walk to the counter, then stop" (the fifteenth spoken set, stop 86), and with the unread
-    word dropped that wording is a stop. Such a wording is not a reading of English, so it is no alternative."""
+    counter,您 stop!" for "walk to the counter, then stop" (the fifteenth spoken set, stop 86)."""
     return all(not char.isalpha() or unicodedata.name(char, "").startswith("LATIN") for char in text)
 
 
 def alternatives(hypotheses: list[Hypothesis], margin: float = ALTERNATIVE_MARGIN) -> tuple[str, ...]:
     """The other wordings within `margin` of the likeliest's score, likeliest first, each once (a wording that
-    differs from one before it only in punctuation or case is the same), none in another script."""
+    differs from one before it only in punctuation or case is the same)."""
     if not hypotheses:
         return ()
     best = hypotheses[0].score
@@ -388,7 +392,7 @@ def alternatives(hypotheses: list[Hypothesis], margin: float = ALTERNATIVE_MARGI
     kept = []
     for hypothesis in hypotheses[1:]:
         words = normalize(hypothesis.text)
-        if best - hypothesis.score <= margin and words and words not in seen and in_latin_script(hypothesis.text):
+        if best - hypothesis.score <= margin and words and words not in seen:
             seen.add(words)
             kept.append(hypothesis.text)
     return tuple(kept)
@@ -405,7 +409,7 @@ def further_wordings(
         best = hypotheses[0].score if hypotheses else 0.0
         for hypothesis in hypotheses[1:]:
             words = normalize(hypothesis.text)
-            if best - hypothesis.score <= margin and words and words not in seen and in_latin_script(hypothesis.text):
+            if best - hypothesis.score <= margin and words and words not in seen:
                 seen.add(words)
                 kept.append(hypothesis.text)
     return tuple(kept)

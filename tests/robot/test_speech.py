@@ -221,8 +221,17 @@ def test_a_second_hearing_puts_the_second_models_wordings_first_then_the_firsts_
         ("Hey robot, grab the apples.", "Head robot, ramped the apple."),
     )
     assert heard_twice([Hypothesis("", -1.0, -1.0)], second[:1]) == ("Hey robot, grab the apple.", ())
-    drifted = [Hypothesis("嘿机器人", -0.1, -0.1), *second]  # the multilingual model's likeliest, in another script
-    assert heard_twice(first, drifted) == heard_twice(first, second)
+    # the multilingual model's likeliest with a word in another script: no transcript, still an alternative
+    drifted = [Hypothesis("都 hey robot, grab the apples.", -0.1, -0.1), *second]
+    assert heard_twice(first, drifted) == (
+        "Hey robot, grab the apple.",
+        ("都 hey robot, grab the apples.", "Head robot, ramped the apple."),
+    )
+    drifted_again = [Hypothesis("都 hey robot, grab the apple.", -0.1, -0.1), *second]  # the same words, drifted
+    assert heard_twice(first, drifted_again) == (
+        "Hey robot, grab the apple.",
+        ("Hey robot, grab the apples.", "Head robot, ramped the apple."),
+    )
 
 
 def test_the_second_model_is_joined_from_its_two_packages_once_and_can_be_turned_off(tmp_path, monkeypatch) -> None:
@@ -352,20 +361,25 @@ def test_whispers_alternatives_are_the_other_wordings_near_the_best_once_each() 
     assert alternatives(beam[:1]) == () and alternatives([]) == ()
 
 
-def test_a_wording_in_another_script_is_no_alternative_and_cannot_make_a_command_a_stop() -> None:
+def test_a_wording_in_another_script_is_kept_to_plan_from_but_cannot_make_a_command_a_stop() -> None:
+    from dataclasses import replace
+
     from robot.speech.asr import Transcript
     from robot.speech.stop_word import transcript_is_stop
-    from robot.speech.whisper import Hypothesis, alternatives, further_wordings
+    from robot.speech.whisper import Hypothesis, alternatives
 
     beam = [
-        Hypothesis("Walk to the counter, then stop.", -0.10, -0.1),
+        Hypothesis("Walk to the counter, the stop.", -0.10, -0.1),
         Hypothesis("Walk to the counter,\u60a8 stop!", -0.20, -0.2),  # the multilingual model's drift
         Hypothesis("Walk to the café, then stop.", -0.25, -0.2),  # a Latin letter stays readable
     ]
-    assert alternatives(beam) == ("Walk to the café, then stop.",)
-    assert further_wordings([beam], ("Walk to the counter, then stop.",)) == ("Walk to the café, then stop.",)
+    # still a wording to plan from (the planner reads "都 hold on for four seconds."), but not one to stop on
+    assert alternatives(beam) == ("Walk to the counter,\u60a8 stop!", "Walk to the café, then stop.")
     heard = Transcript(beam[0].text, 0.9, "whisper", False, 2.0, 0.3, alternatives=alternatives(beam))
     assert not transcript_is_stop(heard)
+    short = Transcript("Hard to beat.", 0.3, "whisper", False, 1.0, 0.3, further_wordings=("\u60a8 stop now!",))
+    assert not transcript_is_stop(short)
+    assert transcript_is_stop(replace(short, further_wordings=("Stop it now!",)))
 
 
 @pytest.fixture(scope="module")
