@@ -156,6 +156,10 @@ def test_synthesis_makes_a_wav_and_refuses_what_it_cannot_say() -> None:
         synthesize("   ")
     with pytest.raises(TTSError, match="at most 500 characters"):
         synthesize("word " * 200)
+    # a variant espeak-ng does not have would be spoken as the plain accent, without a word: refused, naming the one
+    with pytest.raises(TTSError, match=r"no voice variant 'annie'.*Annie"):
+        synthesize("hello", "en-us+annie")
+    assert read_wav_bytes(synthesize("hello", "en-us+Annie")).duration_s > 0.3
 
 
 def test_whisper_without_a_model_says_what_to_set(tmp_path, world) -> None:
