@@ -206,9 +206,8 @@ def _hand_over(m: re.Match[str], clause: Clause) -> Step:
 
 def _go(m: re.Match[str], clause: Clause) -> Step:
     """A walk to a place named in words, or to a pose ("1.2, 0.5, 90 deg": its punctuation is kept)."""
-    group = "place2" if m.groupdict().get("place2") else "place"  # (a shape said two ways)
-    raw = clause.raw_of(m.start(group), m.end(group))
-    return Step("go", place=raw if parse_pose_goal(raw) is not None else m.group(group))
+    raw = clause.raw_of(m.start("place"), m.end("place"))
+    return Step("go", place=raw if parse_pose_goal(raw) is not None else m.group("place"))
 
 
 def _carry(m: re.Match[str], clause: Clause) -> Step:
@@ -271,10 +270,10 @@ def _shapes() -> tuple[tuple[re.Pattern[str], Build], ...]:
         # "keep going to the counter", "carry on walking over to the dock", "carry on to the counter"
         (
             r"(?:keep|carry on|continue)(?: on)? (?:going|walking|moving|heading|driving)(?: on| straight| right)?"
-            rf"(?: over)? {_GO_TO} (?P<place>.+)|(?:carry on|keep on|continue on|go on|move on)(?: over)? {_GO_TO} "
-            r"(?P<place2>.+)",
+            rf"(?: over)? {_GO_TO} (?P<place>.+)",
             _go,
         ),
+        (rf"(?:carry on|keep on|continue on|go on|move on)(?: over)? {_GO_TO} (?P<place>.+)", _go),
         (
             rf"(?:{verbs(*GO_VERBS)}|get yourself|pop|nip|hop|swing)(?: on| straight| right)?(?: {_AWAY})?"
             rf"(?: over)? {_GO_TO} (?P<place>.+)",
