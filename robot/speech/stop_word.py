@@ -66,9 +66,9 @@ _BEFORE = r"(?:hey|okay|ok|robot|please|now)"
 # "stop the robot", "stop right there", "halt right away": every voice of the fifth spoken set said "stop the robot"
 # and no recogniser's wording of it was taken as a stop (stop 60). "right" alone: whisper splits "stop right away" as
 # "Stop right, I'm weird." (the ninth spoken set, stop 80), leaving three words of tail. "(right) here": "halt right
-# there" heard as "Hold right here." (the twelfth set, stop 81)
+# there" heard as "Hold right here." (the twelfth set, stop 81). "that": "stop that" as people say it (stop 87)
 _AFTER = (
-    r"(?:now|right now|please|it|everything|moving|robot|the robot|then|there|right there|here|right here|"
+    r"(?:now|right now|please|it|that|everything|moving|robot|the robot|then|there|right there|here|right here|"
     r"right away|immediately|right)"
 )
 _CLAUSE_BREAK = re.compile(r"[,;:.!?]+")
