@@ -1508,6 +1508,78 @@ HELDOUT19 = SpokenSet(
 )
 
 
+HELDOUT20 = SpokenSet(
+    name="heldout20",
+    # written at stop 87 after that stop's changes, before anything heard it, and only measured
+    voices=(
+        Voice("en-us+Storm", 160),
+        Voice("en-gb-scotland+iven2", 150, 50),
+        Voice("en-gb-x-rp+michel", 160, 45),
+        Voice("en-029+Lee", 155, 55),
+    ),
+    commands=(
+        Case("i need the water bottle", fetch(BOTTLE)),
+        Case("please get me the mug", fetch(MUG)),
+        Case("could you fetch the green apple", fetch(APPLE)),
+        Case("pick up the bottle and bring it to me", fetch(BOTTLE)),
+        Case("go to the dining table", go(TABLE)),
+        Case("head over to the counter", go(COUNTER)),
+        Case("walk to the charger", go(DOCK)),
+        Case("okay, go to the kitchen counter", go(COUNTER)),
+        Case("move the apple to the table", carry(APPLE, TABLE)),
+        Case("bring the mug to the charging dock", carry(MUG, DOCK)),
+        Case("put the bottle on the table", carry(BOTTLE, TABLE)),
+        Case("grab the cup and put it on the counter", carry(MUG, COUNTER)),
+        Case("find the green apple", find(APPLE)),
+        Case("where did the bottle go", find(BOTTLE)),
+        Case("take a look around", LOOK),
+        Case("tell me what you see", LOOK_AND_TELL),
+        Case("go back home", HOME),
+        Case("return to your start position", HOME),
+        Case("go to the dock and then come back home", seq(go(DOCK), HOME)),
+        Case("find the bottle, then fetch it", seq(find(BOTTLE), fetch(BOTTLE))),
+        Case("say welcome home", say("welcome home")),
+        Case("announce that the tea is ready", say("the tea is ready")),
+        Case("wait four seconds", wait("4")),
+        Case("pause for ten seconds", wait("10")),
+        Case("put it down on the counter", carry(APPLE, COUNTER, held=True), held=APPLE),
+        Case("bring it over", fetch(BOTTLE), history=(("find the bottle", find(BOTTLE)),)),
+        Case("the mug, bring it to the table", carry(MUG, TABLE)),
+        Case("um, please walk to the table", go(TABLE)),
+    ),
+    stops=(
+        "stop",
+        "stop now",
+        "halt",
+        "freeze",
+        "hey robot, stop",
+        "emergency stop",
+        "stop right away",
+        "okay, freeze",
+        "halt please",
+        "stop it",
+        "stop, stop",
+        "freeze right now",
+    ),
+    with_stop=(
+        Case("go to the table, then stop", go(TABLE)),
+        Case("walk to the dock and stop there", go(DOCK)),
+        Case("grab the bottle and don't stop", fetch(BOTTLE)),
+        Case("keep walking until you reach the counter", go(COUNTER)),
+    ),
+    out_of_world=(
+        "bring me a towel",
+        "go to the bedroom",
+        "make some coffee",
+        "walk the dog",
+        "find my keys",
+        "close the window",
+        "sing happy birthday",
+        "take out the trash",
+    ),
+)
+
+
 SETS: dict[str, SpokenSet] = {
     s.name: s
     for s in (
@@ -1531,6 +1603,7 @@ SETS: dict[str, SpokenSet] = {
         HELDOUT17,
         HELDOUT18,
         HELDOUT19,
+        HELDOUT20,
     )
 }
 

@@ -6,8 +6,9 @@ from __future__ import annotations
 from robot.planning.context import PlanningContext
 from robot.planning.pipeline import PlanningPipeline, PlanResult
 from robot.planning.planner import ClarificationNeeded, PlanningError
+from robot.speech.asr import ALTERNATIVES_KEPT
 
-MAX_ALTERNATIVES = 8
+MAX_ALTERNATIVES = ALTERNATIVES_KEPT
 MAX_WORDING_CHARS = 500
 
 

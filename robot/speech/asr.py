@@ -10,6 +10,10 @@ from robot.speech.audio import Audio
 # At or above: a command may run without the operator confirming it ("run when sure"). Each engine's confidence is
 # calibrated as how likely its transcript is to give the plan its words were meant to (see each engine).
 AUTO_RUN_CONFIDENCE = 0.7
+# A transcript carries at most this many other wordings: what a command may be sent with (the API's limit) and what
+# the planner tries. (Whisper's two beams can give 19: the page sent them all, and more than the API's 8 of then
+# was refused, stop 87.)
+ALTERNATIVES_KEPT = 12
 
 
 class ASRError(Exception):

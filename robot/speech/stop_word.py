@@ -150,9 +150,9 @@ _ASKS_FOR_SOMETHING = frozenset(
         *HAND_VERBS,
         *(w for kinds in (OBJECT_WORDS, PLACE_WORDS, ROOM_WORDS) for names in kinds.values() for w in names),
         *OTHER_ROOMS,
-        *word_list("""at, by, next, near, beside, in, on, onto, into, front, behind, past, when, once, after, before,
-                      until, till, with, without, and, but, if, unless, then, for, from, don t, dont, never, not,
-                      doing, walking, looking, going, talking, moving, turning"""),
+        *word_list("""home, at, by, next, near, beside, in, on, onto, into, front, behind, past, when, once, after,
+                      before, until, till, with, without, and, but, if, unless, then, for, from, don t, dont, never,
+                      not, doing, walking, looking, going, talking, moving, turning"""),
     )
     for word in phrase.split()
 )
@@ -218,11 +218,12 @@ def stop_first_then_nothing_asked(text: str) -> bool:
 # transcript reads a stop word after a word that makes it part of something else, no other wording overrides that.
 # Only the words that join a step to the one before: a "not" in the transcript can be a misheard "on," ("Okay, move,
 # not stop." for "okay, move on, stop", stop 80).
-_STOP_WORD_AFTER = re.compile(r"\b(?:then|and) (?:stop|halt|freeze)\b")
+_STOP_WORD_AFTER = re.compile(r"\b(?:then|and|next) (?:stop|halt|freeze)\b")
 
 
 def stop_read_as_part_of_a_command(text: str) -> bool:
-    """A stop word the transcript puts after "then" or "and": a step after the one before ("..., then stop")."""
+    """A stop word the transcript puts after "then", "and" or "next": a step after the one before ("..., then stop";
+    "Go to the dock, next stop." for "go to the dock, then stop", the nineteenth spoken set, stop 87)."""
     return bool(_STOP_WORD_AFTER.search(" ".join(normalize(text).split())))
 
 

