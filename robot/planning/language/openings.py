@@ -33,7 +33,7 @@ COMMAND_OPENINGS = word_list("""
 # Words a swapped opening may replace: at most this many, and only where a command or one of its steps begins
 MAX_SWAPPED_WORDS = 3
 # How alike (rapidfuzz's ratio of the letters, 0-100) the words replaced and the opening must be: "work to" and
-# "walk to" 73, "grant" and "grab" 67, "a ounce of" and "announce" 71, "don't get" and "go get" 67.
+# "walk to" 67, "grant" and "grab" 67, "a ounce of" and "announce" 75, "don't get" and "go get" 67.
 MIN_LIKENESS = 60
 _STEP_JOINS = frozenset(word_list("then, and, next"))
 
