@@ -244,12 +244,11 @@ def with_reopened(
     command's opening that the audio supports as well as the transcript, give or take `REOPEN_MARGIN`
     (`likelihoods`: how likely each text is from the audio). The planner reads them only when it cannot read the
     ones before them."""
-    if not text:
-        return others[: ALTERNATIVES_KEPT - REOPENED_KEPT]
+    heard_kept = others[: ALTERNATIVES_KEPT - REOPENED_KEPT]
     candidates = list(dict.fromkeys(w for heard in (text, *others[:2]) for w in reopened_wordings(heard)))
     candidates = candidates[:REOPEN_CANDIDATES]
-    if not candidates:
-        return others[: ALTERNATIVES_KEPT - REOPENED_KEPT]
+    if not text or not candidates:
+        return heard_kept
     heard, *scores = likelihoods([text, *candidates])
     supported = sorted(
         ((score, wording) for score, wording in zip(scores, candidates, strict=True) if score >= heard - REOPEN_MARGIN),
@@ -257,7 +256,7 @@ def with_reopened(
     )
     seen = {normalize(w) for w in (text, *others)}
     reopened = [w for _, w in supported if normalize(w) not in seen][:REOPENED_KEPT]
-    return (*others[: ALTERNATIVES_KEPT - REOPENED_KEPT], *reopened)
+    return (*heard_kept, *reopened)
 
 
 def window_frames(frames: int, full: int, per_second: int) -> int:
