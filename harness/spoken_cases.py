@@ -1580,6 +1580,78 @@ HELDOUT20 = SpokenSet(
 )
 
 
+HELDOUT21 = SpokenSet(
+    name="heldout21",
+    # written at stop 88 after that stop's changes, before anything heard it, and only measured
+    voices=(
+        Voice("en-gb+Hugo", 155),
+        Voice("en-us-nyc+linda", 160, 55),
+        Voice("en-gb-x-gbclan+quincy", 150, 50),
+        Voice("en-029+Denis", 160, 45),
+    ),
+    commands=(
+        Case("can you get me the red mug", fetch(MUG)),
+        Case("i'd like the apple please", fetch(APPLE)),
+        Case("hand me the bottle", fetch(BOTTLE)),
+        Case("go and grab the water bottle for me", fetch(BOTTLE)),
+        Case("walk over to the dining table", go(TABLE)),
+        Case("make your way to the kitchen", go(COUNTER)),
+        Case("drive to the charging station", go(DOCK)),
+        Case("alright, head to the table", go(TABLE)),
+        Case("carry the mug over to the counter", carry(MUG, COUNTER)),
+        Case("take the apple to the charging dock", carry(APPLE, DOCK)),
+        Case("put the cup on the dining table", carry(MUG, TABLE)),
+        Case("pick up the bottle and leave it at the dock", carry(BOTTLE, DOCK)),
+        Case("look for the mug", find(MUG)),
+        Case("can you find the apple", find(APPLE)),
+        Case("look around the room", LOOK),
+        Case("what can you see", LOOK_AND_TELL),
+        Case("go to your home position", HOME),
+        Case("head back to the start", HOME),
+        Case("walk to the counter and then go to the table", seq(go(COUNTER), go(TABLE))),
+        Case("first find the mug, then bring it to me", seq(find(MUG), fetch(MUG))),
+        Case("say hello there", say("hello there")),
+        Case("announce that the meeting starts soon", say("the meeting starts soon")),
+        Case("wait three seconds", wait("3")),
+        Case("hold still for five seconds", wait("5")),
+        Case("place it on the table", carry(MUG, TABLE, held=True), held=MUG),
+        Case("bring it here", fetch(APPLE), history=(("find the apple", find(APPLE)),)),
+        Case("the bottle, put it on the counter", carry(BOTTLE, COUNTER)),
+        Case("uh, could you go to the dock", go(DOCK)),
+    ),
+    stops=(
+        "stop",
+        "halt",
+        "freeze",
+        "stop now",
+        "robot, stop",
+        "emergency stop",
+        "halt right now",
+        "freeze please",
+        "stop, please",
+        "okay stop",
+        "stop immediately",
+        "hey, halt",
+    ),
+    with_stop=(
+        Case("go to the counter, then stop", go(COUNTER)),
+        Case("walk to the table and stop there", go(TABLE)),
+        Case("fetch the apple without stopping", fetch(APPLE)),
+        Case("don't stop until you reach the dock", go(DOCK)),
+    ),
+    out_of_world=(
+        "bring me a blanket",
+        "go to the garage",
+        "wash the dishes",
+        "feed the cat",
+        "find my phone",
+        "turn on the lights",
+        "play some music",
+        "water the plants",
+    ),
+)
+
+
 SETS: dict[str, SpokenSet] = {
     s.name: s
     for s in (
@@ -1604,6 +1676,7 @@ SETS: dict[str, SpokenSet] = {
         HELDOUT18,
         HELDOUT19,
         HELDOUT20,
+        HELDOUT21,
     )
 }
 
