@@ -12,8 +12,8 @@ from robot.speech.audio import Audio
 AUTO_RUN_CONFIDENCE = 0.7
 # A transcript carries at most this many other wordings: what a command may be sent with (the API's limit) and what
 # the planner tries. (Whisper's two beams can give 19: the page sent them all, and more than the API's 8 of then
-# was refused, stop 87.)
-ALTERNATIVES_KEPT = 12
+# was refused, stop 87.) Nine of the beams', three heard again quicker and three with a command's opening (whisper).
+ALTERNATIVES_KEPT = 15
 
 
 class ASRError(Exception):

@@ -44,8 +44,8 @@ from robot.planning.language.lexicon import (
 from robot.planning.world_context import normalize
 from robot.speech.asr import Transcript
 from robot.speech.audio import Audio
+from robot.speech.letters import in_latin_script
 from robot.speech.sphinx import PocketSphinxASR, fit_per_s, grammar_decoder, phone_loop_decoder
-from robot.speech.whisper import in_latin_script
 
 STOP_PHRASES = ("stop", "halt", "freeze", "robot stop", "emergency stop")
 # Keyphrase thresholds (pocketsphinx compares the phrase's path score against a phone loop with them): loose
