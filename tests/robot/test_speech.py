@@ -12,7 +12,7 @@ import pytest
 
 from harness.speech_trials import run_trials, spoken_cases, summarise, word_errors
 from robot.planning.world_context import WorldContext
-from robot.speech.asr import AUTO_RUN_CONFIDENCE
+from robot.speech.asr import ALTERNATIVES_KEPT, AUTO_RUN_CONFIDENCE
 from robot.speech.audio import RATE, Audio, AudioError, add_noise, from_samples, read_wav_bytes
 from robot.speech.denoise import denoise
 from robot.speech.grammar import build_grammar
@@ -745,7 +745,6 @@ def test_a_misheard_verb_is_asked_about_in_the_words_the_audio_supports(whisper)
 
 
 def test_reopened_wordings_follow_the_beams_and_only_those_the_audio_supports_are_kept() -> None:
-    from robot.speech.asr import ALTERNATIVES_KEPT
     from robot.speech.whisper import REOPEN_MARGIN, REOPENED_KEPT, with_reopened
 
     likely = {"grant me the cup please": -10.0, "grab me the cup please": -12.0, "hand me the cup please": -30.0}
@@ -780,6 +779,7 @@ def test_an_unsure_prompt_echo_gives_way_to_what_was_heard_quicker(whisper_twice
     context = PlanningContext(WorldContext.from_layout(generate_world(0)))
     heard = whisper_twice.transcribe(utterance("head over to the counter", Voice("en-029+Lee", 155, 55), 10.0, 48))
     assert not heard.sure
+    assert len(heard.alternatives) <= ALTERNATIVES_KEPT  # what the API takes with a spoken command
     wordings = (heard.text, *heard.alternatives)
     assert "head to the charging dock" not in [w.lower().rstrip(".!") for w in wordings[:3]], heard
     wording, planned = first_readable(planner, wordings, context)
