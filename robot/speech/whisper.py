@@ -309,7 +309,8 @@ def arranged(
     text: str, others: tuple[str, ...], heard_quicker: list[str], is_echo: Callable[[str], bool]
 ) -> tuple[str, tuple[str, ...]]:
     """An unsure transcript and its alternatives: the beams' wordings (the first `BEAM_WORDINGS_KEPT`), then those
-    heard quicker, each once, and the pieces of the prompt last; the transcript is the first of them."""
+    heard quicker, each once, and the pieces of the prompt last; the transcript is the first of them in English
+    letters (as in `heard_twice`)."""
     kept: list[str] = []
     seen: set[str] = set()
     for wording in (text, *others[:BEAM_WORDINGS_KEPT], *heard_quicker):
@@ -318,7 +319,8 @@ def arranged(
             seen.add(words)
             kept.append(wording)
     kept = echoes_last(kept, is_echo)
-    return (kept[0], tuple(kept[1:])) if kept else (text, others)
+    first = next((i for i, wording in enumerate(kept) if in_latin_script(wording)), 0)
+    return (kept[first], tuple(kept[:first] + kept[first + 1 :])) if kept else (text, others)
 
 
 def window_frames(frames: int, full: int, per_second: int) -> int:

@@ -807,3 +807,8 @@ def test_pieces_of_the_prompt_are_echoes_and_go_last() -> None:
     # every wording an echo: the transcript stays the likeliest
     assert arranged("Head to the dock.", (), ["Head to the dock!"], is_echo) == ("Head to the dock.", ())
     assert arranged("Head to the dock.", (), [], lambda _: False) == ("Head to the dock.", ())
+    # the transcript is in English letters: a word the multilingual model wrote in another script stays an alternative
+    assert arranged("Head to the dock.", ("都 hold on.", "Hold still."), [], is_echo) == (
+        "Hold still.",
+        ("都 hold on.", "Head to the dock."),
+    )
