@@ -319,8 +319,7 @@ def arranged(
             seen.add(words)
             kept.append(wording)
     kept = echoes_last(kept, is_echo)
-    first = next((i for i, wording in enumerate(kept) if in_latin_script(wording)), 0)
-    return (kept[first], tuple(kept[:first] + kept[first + 1 :])) if kept else (text, others)
+    return transcript_and_others(kept) if kept else (text, others)
 
 
 def window_frames(frames: int, full: int, per_second: int) -> int:
@@ -484,8 +483,15 @@ def heard_twice(first: list[Hypothesis], second: list[Hypothesis]) -> tuple[str,
             kept[where[words]] = text  # the same words, without the drifted one
     # the transcript is the first wording all in English letters: the multilingual model can drift into another
     # script for a word; such a wording stays an alternative, in its place ("都 hold on for four seconds.")
+    return transcript_and_others(kept)
+
+
+def transcript_and_others(kept: list[str]) -> tuple[str, tuple[str, ...]]:
+    """The first wording all in English letters as the transcript, the rest in their order as its alternatives."""
+    if not kept:
+        return "", ()
     first = next((i for i, text in enumerate(kept) if in_latin_script(text)), 0)
-    return (kept[first], tuple(kept[:first] + kept[first + 1 :])) if kept else ("", ())
+    return kept[first], tuple(kept[:first] + kept[first + 1 :])
 
 
 def alternatives(hypotheses: list[Hypothesis], margin: float = ALTERNATIVE_MARGIN) -> tuple[str, ...]:
