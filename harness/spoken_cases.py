@@ -1652,6 +1652,78 @@ HELDOUT21 = SpokenSet(
 )
 
 
+HELDOUT22 = SpokenSet(
+    name="heldout22",
+    # written at stop 89 after that stop's changes, before anything heard it, and only measured
+    voices=(
+        Voice("en-us+Annie", 160, 55),
+        Voice("en-gb-scotland+gustave", 155, 50),
+        Voice("en-gb-x-rp+Nguyen", 160, 45),
+        Voice("en-029+Marco", 155, 50),
+    ),
+    commands=(
+        Case("could you bring me the mug", fetch(MUG)),
+        Case("i want the green apple", fetch(APPLE)),
+        Case("get me something to drink, the bottle", fetch(BOTTLE)),
+        Case("fetch the blue bottle please", fetch(BOTTLE)),
+        Case("go over to the counter", go(COUNTER)),
+        Case("walk to the living room table", go(TABLE)),
+        Case("please head to the dock", go(DOCK)),
+        Case("okay, go to the kitchen counter", go(COUNTER)),
+        Case("take the mug to the table", carry(MUG, TABLE)),
+        Case("move the apple over to the counter", carry(APPLE, COUNTER)),
+        Case("bring the bottle to the charging dock", carry(BOTTLE, DOCK)),
+        Case("grab the red mug and put it on the counter", carry(MUG, COUNTER)),
+        Case("where is the apple", find(APPLE)),
+        Case("try to find the bottle", find(BOTTLE)),
+        Case("have a look around", LOOK),
+        Case("tell me what you see", LOOK_AND_TELL),
+        Case("go home", HOME),
+        Case("return to where you started", HOME),
+        Case("go to the dock and then come back home", seq(go(DOCK), HOME)),
+        Case("find the bottle and then bring it to me", seq(find(BOTTLE), fetch(BOTTLE))),
+        Case("say good morning", say("good morning")),
+        Case("tell everyone that lunch is ready", say("lunch is ready")),
+        Case("wait two seconds", wait("2")),
+        Case("pause for ten seconds", wait("10")),
+        Case("put it on the counter", carry(APPLE, COUNTER, held=True), held=APPLE),
+        Case("now take it to the table", carry(MUG, TABLE), history=(("find the mug", find(MUG)),)),
+        Case("the apple, bring it to me", fetch(APPLE)),
+        Case("um, can you go to the table", go(TABLE)),
+    ),
+    stops=(
+        "stop",
+        "halt",
+        "freeze",
+        "stop it",
+        "robot stop",
+        "emergency stop",
+        "stop right now",
+        "freeze now",
+        "halt please",
+        "hey stop",
+        "stop stop",
+        "okay, freeze",
+    ),
+    with_stop=(
+        Case("walk to the dock and stop there", go(DOCK)),
+        Case("go to the table, then stop", go(TABLE)),
+        Case("bring me the mug without stopping", fetch(MUG)),
+        Case("keep going until you reach the counter, then stop", go(COUNTER)),
+    ),
+    out_of_world=(
+        "bring me my keys",
+        "go to the bathroom",
+        "clean the floor",
+        "walk the dog",
+        "open the window",
+        "make me a coffee",
+        "call my mom",
+        "find the remote",
+    ),
+)
+
+
 SETS: dict[str, SpokenSet] = {
     s.name: s
     for s in (
@@ -1677,6 +1749,7 @@ SETS: dict[str, SpokenSet] = {
         HELDOUT19,
         HELDOUT20,
         HELDOUT21,
+        HELDOUT22,
     )
 }
 
