@@ -105,7 +105,14 @@ def run_suite(suite: str, args: argparse.Namespace) -> int:
         except ValueError as exc:
             print(exc, file=sys.stderr)
             return 2
-        result = run_language(get_settings(), backends, no_fallback=args.no_fallback)
+        from harness.spoken_cases import SETS
+
+        spoken = tuple(s.strip() for s in (args.spoken or "").split(",") if s.strip())
+        unknown = [name for name in spoken if name not in SETS]
+        if unknown:
+            raise SystemExit(f"unknown spoken set(s) {', '.join(unknown)}; known: {', '.join(SETS)}")
+        engines = tuple(e.strip() for e in args.engines.split(",") if e.strip())
+        result = run_language(get_settings(), backends, args.no_fallback, spoken, engines, args.quick)
     elif suite == "sessions":
         from bench.sessions import run_sessions
 

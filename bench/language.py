@@ -3,7 +3,8 @@ planner: the share planned right (everyday wording, close paraphrases of the REA
 requests refused, questions asked, and how long planning takes.
 
 Two sets (`language_dev`, tuned on; `language_heldout`, written first and never tuned on) are reported apart, and
-the bars must hold on both. The typed part is measured now; `spoken` is where recognised speech will be measured.
+the bars must hold on both. With `spoken_sets` (`--spoken dev,heldout21`), the same figures for those sets spoken
+(`bench/spoken.py`: espeak-ng voices, clean and in noise), per recogniser and planner, beside the typed ones.
 LLM backends are measured only where configured (HUMANOID_OPENAI_*, HUMANOID_LOCAL_MODEL_PATH, or --backends).
 """
 
@@ -38,10 +39,18 @@ def configured_backends(settings: Settings) -> tuple[str, ...]:
     return tuple(backends)
 
 
-def run_language(settings: Settings, backends: tuple[str, ...] | None = None, no_fallback: bool = False) -> dict:
+def run_language(
+    settings: Settings,
+    backends: tuple[str, ...] | None = None,
+    no_fallback: bool = False,
+    spoken_sets: tuple[str, ...] = (),
+    engines: tuple[str, ...] = ("whisper", "pocketsphinx"),
+    quick: bool = False,
+) -> dict:
     layout = generate_world(0)
     backends = backends or configured_backends(settings)
     typed: dict[str, dict[str, Any]] = {name: {} for name in SETS}
+    pipelines: dict[str, PlanningPipeline] = {}
     for backend in backends:
         config = settings.model_copy(update={"planner_backend": backend}).planner_config()
         if no_fallback:
@@ -52,13 +61,51 @@ def run_language(settings: Settings, backends: tuple[str, ...] | None = None, no
                 typed[set_name][backend] = {"available": False, "reason": pipeline.unavailable}
                 continue
             typed[set_name][backend] = {**measure(pipeline, backend, cases, layout), "model": pipeline.describe()}
+        if pipeline.primary is not None:
+            pipelines[backend] = pipeline
+    spoken = (
+        measure_spoken(spoken_sets, engines, pipelines, quick)
+        if spoken_sets
+        else {"measured": False, "how": HOW_SPOKEN}
+    )
     return {
         "suite": "language",
         "sets": {name: dict(Counter(c.kind for c in cases)) for name, cases in SETS.items()},
         "typed": typed,
-        "spoken": {"measured": False, "reason": "recognised speech is measured by issue 34's part 2"},
-        "bars": _bars(typed),
+        "spoken": spoken,
+        "bars": {**_bars(typed), **spoken.get("bars", {})},
     }
+
+
+HOW_SPOKEN = "humanoid bench language --spoken dev,heldout21 (about 9 min a set with whisper), or humanoid bench speech"
+
+
+def measure_spoken(
+    set_names: tuple[str, ...],
+    engines: tuple[str, ...],
+    pipelines: dict[str, PlanningPipeline],
+    quick: bool = False,
+) -> dict[str, Any]:
+    """The spoken sets heard by each engine and planned by each planner: per set, engine and planner, the spoken
+    figures of `humanoid bench speech` (plans right, word error rate, stops, requests out of the world, end of
+    speech to plan), and the spoken bars for each. `quick`: a few utterances of each set, clean (as `bench speech
+    --quick`: shows it works; its figures mean little)."""
+    from bench.spoken import NOISY_SNR_DB, few, run_set, speech_bars, summarise
+    from harness.spoken_cases import SETS as SPOKEN_SETS
+
+    snrs = (None,) if quick else (None, NOISY_SNR_DB)
+
+    figures: dict[str, dict[str, dict[str, Any]]] = {}
+    bars: dict[str, Any] = {}
+    for backend, pipeline in pipelines.items():
+        for name in set_names:
+            spoken = few(SPOKEN_SETS[name]) if quick else SPOKEN_SETS[name]
+            summary = summarise(run_set(spoken, engines, snrs, planner=pipeline))
+            for engine, per_engine in summary[name].items():
+                figures.setdefault(name, {}).setdefault(engine, {})[backend] = per_engine
+            for key, bar in speech_bars({f"{name}/{backend}": summary[name]}, None).items():
+                bars[f"spoken/{key}"] = bar
+    return {"measured": True, "quick": quick, "sets": figures, "bars": bars}
 
 
 def measure(pipeline: PlanningPipeline, backend: str, cases: tuple[LanguageCase, ...], layout: WorldLayout) -> dict:

@@ -28,7 +28,7 @@ from robot.interface import CommandReply
 from robot.model.world import generate_world
 from robot.planning.context import PlanningContext
 from robot.planning.heard import first_readable
-from robot.planning.pipeline import PlannerConfig, build_pipeline
+from robot.planning.pipeline import PlannerConfig, PlanningPipeline, build_pipeline
 from robot.planning.planner import ClarificationNeeded, PlanningError
 from robot.planning.world_context import WorldContext, normalize
 from robot.speech.asr import AUTO_RUN_CONFIDENCE, SpeechRecognizer
@@ -38,6 +38,7 @@ from robot.speech.engines import build_recognizer
 from robot.speech.robot_voice import RobotVoice, VoiceConfig
 from robot.speech.stop_word import StopSpotter, transcript_is_stop
 from robot.speech.tts import synthesize_audio
+from robot.speech.world_reading import WorldReadRecognizer
 
 NOISY_SNR_DB = 10.0
 BARS = {
@@ -94,16 +95,19 @@ class Heard:
     transcript_stop: bool
     asked: bool = False  # the plan is of another wording the recogniser heard: it waits for the operator's yes
     heard_again: bool = False  # a second model heard it again (the first was not sure)
+    # the engine's likeliest wording's errors, when the transcript is another (read against the world)
+    first_errors: int | None = None
 
 
 def _plan(
-    planner, text: str, case: Case | None, layout, alternatives: tuple[str, ...] = ()
+    planner, text: str, case: Case | None, layout, alternatives: tuple[str, ...] = (), read_in_world: bool = False
 ) -> tuple[bool | None, bool, float, bool]:
     """(plan right, a plan was made, planning ms, the plan is of one of the recogniser's other wordings: the robot
-    asks "did you mean ...?" before running it). With no case (a request out of the world), right is no plan."""
+    asks "did you mean ...?" before running it, or the page waits for Send when the transcript was read against the
+    world). With no case (a request out of the world), right is no plan."""
     started = time.perf_counter()
     context = context_for(case, layout) if case is not None else PlanningContext(WorldContext.from_layout(layout))
-    result, asked = None, False
+    result, asked = None, read_in_world
     try:
         result = planner.plan(text, context) if text else None
     except ClarificationNeeded:
@@ -127,17 +131,22 @@ def run_set(
     whisper_threads: int = 2,
     whisper_model: str = "",
     whisper_second_model: str = "auto",
+    planner: PlanningPipeline | None = None,
 ) -> list[Heard]:
+    """Every utterance of `spoken`, heard by each engine and planned by `planner` (the rules planner unless told)."""
     layout = generate_world(0)
     world = WorldContext.from_layout(layout)
-    planner = build_pipeline(PlannerConfig(backend="rules"))
-    recognizers: dict[str, SpeechRecognizer] = {e: build_recognizer(e, world.objects, world.places) for e in engines}
+    planner = planner or build_pipeline(PlannerConfig(backend="rules"))
+    recognizers: dict[str, SpeechRecognizer] = {
+        e: build_recognizer(e, world.objects, world.places, world=world) for e in engines
+    }
     if "whisper" in recognizers:
         from robot.speech.whisper import WhisperASR
 
-        recognizers["whisper"] = WhisperASR(
+        whisper = WhisperASR(
             whisper_model, world.objects, world.places, threads=whisper_threads, second_model=whisper_second_model
         )
+        recognizers["whisper"] = WorldReadRecognizer(whisper, world)
     spotter = StopSpotter(world.objects, world.places)
     items: list[tuple[str, str, Case | None]] = [("command", c.text, c) for c in spoken.commands]
     items += [("with_stop", c.text, c) for c in spoken.with_stop] + [("stop", t, None) for t in spoken.stops]
@@ -156,9 +165,16 @@ def run_set(
                         right, planned, plan_ms, asked = None, False, 0.0, False
                     else:
                         right, planned, plan_ms, asked = _plan(
-                            planner, transcript.text, case, layout, transcript.alternatives
+                            planner,
+                            transcript.text,
+                            case,
+                            layout,
+                            transcript.alternatives,
+                            bool(transcript.first_heard),
                         )
                     errors, words = word_errors(wer_words(text), wer_words(transcript.text))
+                    first = transcript.first_heard or transcript.text
+                    first_errors = word_errors(wer_words(text), wer_words(first))[0]
                     results.append(
                         Heard(
                             spoken.name,
@@ -181,6 +197,7 @@ def run_set(
                             transcript_is_stop(transcript),
                             asked,
                             transcript.heard_again,
+                            first_errors,
                         )
                     )
     return results
@@ -219,6 +236,12 @@ def _group(selected: list[Heard]) -> dict[str, Any]:
         "utterances": len(commands),
         "wer": round(errors / words, 4) if words else None,
         "wer_everyday": _wer([r for r in commands if r.kind == "command"]),
+        # of the engine's likeliest wordings, before the transcript is read against the world
+        "wer_first_wording": round(
+            sum(r.errors if r.first_errors is None else r.first_errors for r in commands) / words, 4
+        )
+        if words
+        else None,
         "plan_right": _rate([bool(r.plan_right) for r in judged]),
         # of the right plans, those of another wording the recogniser heard (the robot asks before running them)
         "plan_right_asked_first": _rate([bool(r.plan_right) and r.asked for r in judged]),
@@ -396,7 +419,7 @@ def run_speech(
     """`quick`: per set one voice, one command, one stop and one command with a stop in it, clean only, and two
     stops on the robot microphone (shows the bench works; its figures mean little)."""
     started = time.perf_counter()
-    chosen = [_few(SETS[name]) if quick else SETS[name] for name in sets]
+    chosen = [few(SETS[name]) if quick else SETS[name] for name in sets]
     snrs = (None,) if quick else (None, NOISY_SNR_DB)
     results = [r for spoken in chosen for r in run_set(spoken, engines, snrs, 2, whisper_model, whisper_second_model)]
     summary = summarise(results)
@@ -413,7 +436,7 @@ def run_speech(
             result["robot_microphone_stop"] = run_robot_microphone_stops(QUICK_ROBOT_STOPS, engine="pocketsphinx")
         else:
             result["robot_microphone_stop"] = run_robot_microphone_stops()
-    result["bars"] = _bars(summary, result.get("robot_microphone_stop"))
+    result["bars"] = speech_bars(summary, result.get("robot_microphone_stop"))
     result["misheard"] = [
         r.__dict__
         for name in sets
@@ -425,7 +448,8 @@ def run_speech(
     return result
 
 
-def _few(spoken: SpokenSet) -> SpokenSet:
+def few(spoken: SpokenSet) -> SpokenSet:
+    """One voice, and one sentence of each kind."""
     return SpokenSet(
         spoken.name,
         spoken.voices[:1],
@@ -436,7 +460,7 @@ def _few(spoken: SpokenSet) -> SpokenSet:
     )
 
 
-def _bars(summary: dict[str, Any], robot: dict[str, Any] | None) -> dict[str, Any]:
+def speech_bars(summary: dict[str, Any], robot: dict[str, Any] | None) -> dict[str, Any]:
     bars: dict[str, Any] = {}
     for set_name, engines in summary.items():
         for engine, figures in engines.items():

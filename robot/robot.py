@@ -427,6 +427,7 @@ class Robot(InProcessPort):
                 self.submit,
                 self._events.subscribe,
                 estop=lambda: self.submit(EStop(source="voice")),
+                world=world,
             )
             self._voice.start()
         how = "real time" if self.realtime else "headless"

@@ -3,13 +3,20 @@ read. One rule for the robot (which then asks before running it) and for the spe
 
 from __future__ import annotations
 
+from dataclasses import replace
+from typing import Literal
+
+from robot.planning.config import PlannerConfig
 from robot.planning.context import PlanningContext
-from robot.planning.pipeline import PlanningPipeline, PlanResult
+from robot.planning.pipeline import PlanningPipeline, PlanResult, build_pipeline
 from robot.planning.planner import ClarificationNeeded, PlanningError
+from robot.planning.world_context import WorldContext
 from robot.speech.asr import ALTERNATIVES_KEPT
 
 MAX_ALTERNATIVES = ALTERNATIVES_KEPT
 MAX_WORDING_CHARS = 500
+
+Reading = Literal["plans", "asks", "unread"]
 
 
 def first_readable(
@@ -25,3 +32,33 @@ def first_readable(
         except (ClarificationNeeded, PlanningError):
             continue
     return None
+
+
+class WorldReader:
+    """Whether a wording reads as a command of this world, asked of the rules planner (deterministic, a few ms a
+    wording, whatever planner the robot runs). A recogniser asks it to choose, among the wordings the audio
+    supports, the likeliest that is a command. It does not know what the robot holds, so a wording reads when it
+    plans with empty hands or with something in them ("put it on the table")."""
+
+    def __init__(self, world: WorldContext) -> None:
+        self._planning = build_pipeline(PlannerConfig(backend="rules"))
+        self._contexts = [PlanningContext(replace(world, held_object=None))]
+        if world.objects:
+            holding = replace(world, held_object=next(iter(world.objects)))
+            self._contexts.append(PlanningContext(holding))
+
+    def read(self, wording: str) -> Reading:
+        """ "plans", "asks" (the planner would ask a question first: it understood enough for that) or "unread"."""
+        wording = wording.strip()[:MAX_WORDING_CHARS]
+        reading: Reading = "unread"
+        if not wording:
+            return reading
+        for context in self._contexts:
+            try:
+                self._planning.plan(wording, context)
+                return "plans"
+            except ClarificationNeeded:
+                reading = "asks"
+            except PlanningError:
+                continue
+        return reading

@@ -38,11 +38,18 @@ class Transcript:
     heard_again: bool = False
     # Wordings further down the beam than the alternatives: only the spoken stop looks at them, in a short utterance
     further_wordings: tuple[str, ...] = ()
+    # The engine's likeliest wording, when `text` is another of its wordings: the likeliest that reads as a command of
+    # the world, which the first did not ("Go to your home position." under "Go to your phone position."). Never
+    # sure: the operator sends it, as they would answer "did you mean ...?".
+    first_heard: str = ""
+    # The alternatives that are only the engine's prompt said back ("Head to the charging dock."), put last when it is
+    # this unsure: they read as commands by construction, so a world reading never takes one (`world_reading`)
+    prompt_echoes: tuple[str, ...] = ()
 
     @property
     def sure(self) -> bool:
         """Sure enough to run unasked (when the operator allows it and the planner understands it)."""
-        return bool(self.text) and self.confidence >= AUTO_RUN_CONFIDENCE
+        return bool(self.text) and self.confidence >= AUTO_RUN_CONFIDENCE and not self.first_heard
 
     @property
     def real_time_factor(self) -> float:

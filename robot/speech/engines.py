@@ -3,9 +3,12 @@ with the world's command grammar (always there: the fallback)."""
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 from robot.speech.asr import ASRError, SpeechRecognizer
+
+if TYPE_CHECKING:
+    from robot.planning.world_context import WorldContext
 
 Engine = Literal["auto", "pocketsphinx", "whisper"]
 ENGINES: tuple[Engine, ...] = ("auto", "pocketsphinx", "whisper")
@@ -26,9 +29,27 @@ def build_recognizer(
     places: dict[str, tuple[str, ...]],
     whisper_model_dir: str = "",
     whisper_second_model: str = "auto",
+    world: WorldContext | None = None,
 ) -> SpeechRecognizer:
-    """`whisper_second_model`: what hears again what whisper's model is not sure of (see `WhisperASR`)."""
-    engine = resolve_engine(engine, whisper_model_dir)
+    """`whisper_second_model`: what hears again what whisper's model is not sure of (see `WhisperASR`). With `world`,
+    transcripts are read against it: the likeliest wording that is one of its commands (`read_in_world`)."""
+    recognizer = _engine(
+        resolve_engine(engine, whisper_model_dir), objects, places, whisper_model_dir, whisper_second_model
+    )
+    if world is None:
+        return recognizer
+    from robot.speech.world_reading import WorldReadRecognizer
+
+    return WorldReadRecognizer(recognizer, world)
+
+
+def _engine(
+    engine: str,
+    objects: dict[str, tuple[str, ...]],
+    places: dict[str, tuple[str, ...]],
+    whisper_model_dir: str,
+    whisper_second_model: str,
+) -> SpeechRecognizer:
     if engine == "pocketsphinx":
         from robot.speech.sphinx import PocketSphinxASR
 

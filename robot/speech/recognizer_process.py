@@ -16,12 +16,15 @@ import subprocess
 import sys
 import threading
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, TYPE_CHECKING, Any
 
 from robot.control.priority import ordinary_priority
 from robot.speech.asr import ASRError, Transcript
 from robot.speech.audio import Audio
 from robot.speech.stop_word import StopVerdict
+
+if TYPE_CHECKING:
+    from robot.planning.world_context import WorldContext
 
 STARTUP_TIMEOUT_S = 60.0
 _HEADER = struct.Struct("<I")
@@ -48,7 +51,8 @@ def _receive(stream: IO[bytes]) -> Any:
 class RecognizerProcess:
     """`transcribe` as in-process engines, decoded in a child process (started here; `close()` ends it); with
     `spotter`, also the spoken stop's verdict on an utterance (`spot`, or `feed` as it comes and `finish`). An
-    engine of "" loads no recogniser (a process for the spotter alone)."""
+    engine of "" loads no recogniser (a process for the spotter alone). With `world`, transcripts are read against
+    it (`robot.speech.world_reading`)."""
 
     def __init__(
         self,
@@ -58,6 +62,7 @@ class RecognizerProcess:
         whisper_model_dir: str = "",
         spotter: bool = False,
         whisper_second_model: str = "auto",
+        world: WorldContext | None = None,
     ) -> None:
         from robot.speech.engines import resolve_engine
 
@@ -74,7 +79,7 @@ class RecognizerProcess:
         self._lock = threading.Lock()
         assert self._process.stdin is not None and self._process.stdout is not None
         self._in, self._out = self._process.stdin, self._process.stdout
-        _send(self._in, (engine, objects, places, whisper_model_dir, spotter, whisper_second_model))
+        _send(self._in, (engine, objects, places, whisper_model_dir, spotter, whisper_second_model, world))
         reply = self._reply()
         if reply[0] != "ready":
             self.close()
@@ -144,9 +149,11 @@ def _serve(stdin: IO[bytes], stdout: IO[bytes]) -> None:
     from robot.speech.engines import build_recognizer
     from robot.speech.stop_word import StopSpotter
 
-    engine, objects, places, whisper_model_dir, with_spotter, second_model = _receive(stdin)
+    engine, objects, places, whisper_model_dir, with_spotter, second_model, world = _receive(stdin)
     try:
-        recognizer = build_recognizer(engine, objects, places, whisper_model_dir, second_model) if engine else None
+        recognizer = (
+            build_recognizer(engine, objects, places, whisper_model_dir, second_model, world) if engine else None
+        )
         spotter = StopSpotter(objects, places) if with_spotter else None
     except ASRError as exc:
         _send(stdout, ("error", str(exc)))

@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from robot.interface import CommandReply, Event, EventSubscription, Level, RunCommand
+from robot.planning.world_context import WorldContext
 from robot.speech.asr import ASRError, SpeechRecognizer, Transcript
 from robot.speech.audio import Audio
 from robot.speech.devices import AudioDevice, find_device
@@ -70,9 +71,10 @@ class RobotVoice:
         output_stream: Callable[..., Any] | None = None,
         recognizer_factory: Callable[..., SpeechRecognizer] = RecognizerProcess,
         estop: Callable[[], CommandReply] | None = None,  # latches the e-stop (source "voice")
+        world: WorldContext | None = None,  # transcripts are read against it (`robot.speech.world_reading`)
     ) -> None:
         self.config = config
-        self._objects, self._places = objects, places
+        self._objects, self._places, self._world = objects, places, world
         self._publish = publish
         self._run_command = run_command
         self._subscribe = subscribe
@@ -141,6 +143,7 @@ class RobotVoice:
                     self._places,
                     self.config.whisper_model_dir,
                     whisper_second_model=self.config.whisper_second_model,
+                    world=self._world,
                 )
                 if self.config.spoken_stop and self._estop is not None:
                     self._spotter = RecognizerProcess("", self._objects, self._places, spotter=True)
@@ -304,6 +307,7 @@ class RobotVoice:
             "alternatives": list(transcript.alternatives),
             "unsure_names": list(transcript.unsure_names),
             "heard_again": transcript.heard_again,
+            "first_heard": transcript.first_heard,
             "auto_run": transcript.sure,
             "will_run": will_run,
             "source": SOURCE,
@@ -349,6 +353,7 @@ class RobotVoice:
                 self._places,
                 self.config.whisper_model_dir,
                 whisper_second_model=self.config.whisper_second_model,
+                world=self._world,
             )
         except Exception as exc:
             self.microphone_status = f"no robot microphone: the recogniser cannot restart ({exc})"

@@ -217,9 +217,12 @@ class WhisperASR:
                 heard = Transcript(
                     text, confidence, self.name, False, audio.duration_s, 0.0, others, unsure, False, further
                 )
+                echoes: tuple[str, ...] = ()
                 if text and confidence < AUTO_RUN_CONFIDENCE and not transcript_is_stop(heard):  # a stop: no time lost
                     text, others = self._heard_quicker(samples, text, others, confidence)
                     unsure = tuple(n for n in unsure if n in normalize(text).split())
+                    if confidence < ECHO_CONFIDENCE:
+                        echoes = tuple(w for w in others if self._is_echo(w))
                 else:
                     others = others[:BEAM_WORDINGS_KEPT]
                 others = self._with_reopened(window, text, others)
@@ -234,6 +237,7 @@ class WhisperASR:
                 unsure,
                 heard_again,
                 further,
+                prompt_echoes=tuple(w for w in echoes if w in others),
             )
         with self._lock:  # longer than a command: whisper's own windowing, one transcript
             segments, _ = self._model.transcribe(

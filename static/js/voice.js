@@ -21,7 +21,8 @@
   function howSure(data) {
     const form = data.in_grammar ? "" : ", not a known command form";
     const names = (data.unsure_names || []).map((n) => `"${n}"`).join(", ");
-    return `confidence ${data.confidence.toFixed(2)}${form}${names ? `; ${names} may be a guess: check it` : ""}`;
+    const read = data.first_heard ? `; first heard as "${data.first_heard}", read as the nearest command` : "";
+    return `confidence ${data.confidence.toFixed(2)}${form}${names ? `; ${names} may be a guess: check it` : ""}${read}`;
   }
 
   function heard(text, isError) {

@@ -294,6 +294,7 @@ def test_speech_is_transcribed_from_wav_or_raw_pcm_and_bad_audio_is_refused(clie
     heard = client.post("/api/speech/transcribe", content=wav, headers={"Content-Type": "audio/wav"}).json()
     assert heard["text"] == "go to the charging dock" and heard["in_grammar"] is True
     assert set(heard) >= {"confidence", "engine", "audio_s", "decode_ms", "auto_run", "alternatives", "unsure_names"}
+    assert heard["first_heard"] == ""  # what it heard first is a command: not read as another
     pcm = synthesize_audio("find the green apple", "en-us", 160).pcm()
     raw = client.post("/api/speech/transcribe", content=pcm, headers={"Content-Type": "audio/L16; rate=16000"})
     assert raw.json()["text"] == "find the green apple"

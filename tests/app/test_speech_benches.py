@@ -36,6 +36,8 @@ def test_the_speech_bench_reports_word_errors_plans_and_stops_per_engine_and_tim
         assert figures["stop"]["stop_utterances"] == 1 and figures["stop"]["ordinary_commands"] == 3
         assert figures["out_of_world"]["utterances"] == 1
         assert figures["confidence"]["threshold"] == 0.7
+        # the transcript is read against the world; the engine's own first wording is measured too
+        assert figures["clean"]["wer_first_wording"] >= figures["clean"]["wer"] or engine != "whisper"
     whisper = result["sets"]["dev"]["whisper"]
     assert whisper["stop"]["false_stops"] == 0 and whisper["stop"]["false_stops_heard"] == []  # "... stop there"
     away = whisper["out_of_world"]  # "bring me a beer": refused, or listed with what was heard, and never run unasked
@@ -45,3 +47,14 @@ def test_the_speech_bench_reports_word_errors_plans_and_stops_per_engine_and_tim
     latency = stops["end_of_word_to_estop_ms"]
     # the voice-activity window (0.2 s) is part of it: never faster than that (its bar is the bench's business)
     assert 150 < latency["p50"] <= latency["max"], stops
+
+
+def test_the_language_bench_reports_spoken_sets_per_recogniser_and_planner_against_the_spoken_bars() -> None:
+    result = bench("language", "--spoken", "dev", "--quick", "--engines", "pocketsphinx")
+    assert result["spoken"]["measured"] and result["spoken"]["quick"]
+    figures = result["spoken"]["sets"]["dev"]["pocketsphinx"]["rules"]
+    assert figures["clean"]["utterances"] == 2 and figures["stop"]["stop_utterances"] == 1
+    assert set(figures["clean"]["end_of_speech_to_plan_ms"]) == {"p50", "p90"}
+    spoken_bars = {name for name in result["bars"] if name.startswith("spoken/dev/rules/pocketsphinx/")}
+    assert {name.rsplit("/", 1)[1] for name in spoken_bars} >= {"plan_right_clean", "wer_clean", "stop_heard"}
+    assert "heldout_everyday" in result["bars"]  # the typed bars stay

@@ -126,6 +126,25 @@ def test_a_transcript_with_a_name_the_hints_may_have_put_there_waits_for_send_an
     expect(page.locator("#command-text")).to_have_value("Bring the apple.")
 
 
+def test_a_transcript_read_as_the_nearest_command_waits_for_send_and_says_what_was_heard_first(page) -> None:
+    """Whisper was sure of "Go to your phone position.", no command; the likeliest command it heard is offered for
+    Send, saying what it heard first."""
+    expect = playwright_api.expect
+    heard = {
+        "text": "Go to your home position.",
+        "confidence": 0.86,
+        "in_grammar": False,
+        "alternatives": ["Go to your phone position."],
+        "unsure_names": [],
+        "first_heard": "Go to your phone position.",
+        "will_run": False,
+    }
+    page.evaluate("heard => humanoid.onRobotHeard(heard)", heard)
+    expect(page.locator("#heard")).to_contain_text('first heard as "Go to your phone position."')
+    expect(page.locator("#heard")).to_contain_text("press Send to run it")
+    expect(page.locator("#command-text")).to_have_value("Go to your home position.")
+
+
 def test_an_operator_approves_edits_and_pauses_plans_from_the_page(page) -> None:
     expect = playwright_api.expect
     expect(page.locator("#planner")).to_contain_text("planner: rules")

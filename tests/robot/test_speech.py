@@ -812,3 +812,23 @@ def test_pieces_of_the_prompt_are_echoes_and_go_last() -> None:
         "Hold still.",
         ("都 hold on.", "Head to the dock."),
     )
+
+
+def test_a_sure_transcript_no_command_of_the_world_gives_way_to_the_wording_that_is(world, whisper_twice) -> None:
+    """A recording of the speech bench's (heldout21, seed 129): "go to your home position" in a British voice. tiny.en
+    is sure of "Go to your phone position.", which no planner reads; "Go to your home position." is in its beam. Read
+    against the world, that is the transcript, and it is not sure: the operator sends it."""
+    from harness.spoken_cases import Voice, utterance
+    from robot.model.world import generate_world
+    from robot.planning.context import PlanningContext
+    from robot.planning.pipeline import PlannerConfig, build_pipeline
+    from robot.speech.world_reading import WorldReadRecognizer
+
+    audio = utterance("go to your home position", Voice("en-gb+Hugo", 155), None, 129)
+    first = whisper_twice.transcribe(audio)
+    heard = WorldReadRecognizer(whisper_twice, world).transcribe(audio)
+    assert heard.first_heard == first.text and "home" in heard.text.lower() and "home" not in first.text.lower()
+    assert not heard.sure and heard.alternatives[0] == first.text
+    planner = build_pipeline(PlannerConfig(backend="rules"))
+    planned = planner.plan(heard.text, PlanningContext(WorldContext.from_layout(generate_world(0))))
+    assert [step.action for step in planned.plan.steps][:1] == ["go_home"]

@@ -52,6 +52,7 @@ def recognizer(rt: Runtime) -> RecognizerProcess:
                 rt.settings.whisper_model_dir,
                 spotter=True,
                 whisper_second_model=rt.settings.whisper_second_model,
+                world=world,
             )
         return _recognizers[key]
 
@@ -120,6 +121,8 @@ async def transcribe(request: Request, rt: RuntimeDep) -> dict[str, Any]:
         # the world's names the audio alone barely supports (the hints put them there): why it is not sure
         "unsure_names": list(transcript.unsure_names),
         "heard_again": transcript.heard_again,
+        # whisper's likeliest wording when `text` is a likelier command of the world's (then never auto_run)
+        "first_heard": transcript.first_heard,
         # the page runs it without asking when its operator allows that and the recogniser is this sure
         "auto_run": transcript.sure and latched is None,
         "stop_word": latched is not None,
