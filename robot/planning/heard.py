@@ -3,7 +3,7 @@ read. One rule for the robot (which then asks before running it) and for the spe
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Literal
 
 from robot.planning.config import PlannerConfig
@@ -15,8 +15,6 @@ from robot.speech.asr import ALTERNATIVES_KEPT
 
 MAX_ALTERNATIVES = ALTERNATIVES_KEPT
 MAX_WORDING_CHARS = 500
-
-Reading = Literal["plans", "asks", "unread"]
 
 
 def first_readable(
@@ -34,8 +32,20 @@ def first_readable(
     return None
 
 
+@dataclass(frozen=True)
+class Reading:
+    """How the planner reads a wording: it `plans` it, `asks` a question first (it understood enough for that), or
+    leaves it `unread`; `names`: the world's names the plan's steps use, or those the question offers."""
+
+    kind: Literal["plans", "asks", "unread"]
+    names: frozenset[str] = frozenset()
+
+
+UNREAD = Reading("unread")
+
+
 class WorldReader:
-    """Whether a wording reads as a command of this world, asked of the rules planner (deterministic, a few ms a
+    """How a wording reads as a command of this world, asked of the rules planner (deterministic, a few ms a
     wording, whatever planner the robot runs). A recogniser asks it to choose, among the wordings the audio
     supports, the likeliest that is a command. It does not know what the robot holds, so a wording reads when it
     plans with empty hands or with something in them ("put it on the table")."""
@@ -48,17 +58,16 @@ class WorldReader:
             self._contexts.append(PlanningContext(holding))
 
     def read(self, wording: str) -> Reading:
-        """ "plans", "asks" (the planner would ask a question first: it understood enough for that) or "unread"."""
         wording = wording.strip()[:MAX_WORDING_CHARS]
-        reading: Reading = "unread"
+        reading = UNREAD
         if not wording:
             return reading
         for context in self._contexts:
             try:
-                self._planning.plan(wording, context)
-                return "plans"
-            except ClarificationNeeded:
-                reading = "asks"
+                plan = self._planning.plan(wording, context).plan
+                return Reading("plans", frozenset(v for step in plan.steps for v in step.args.values()))
+            except ClarificationNeeded as question:
+                reading = Reading("asks", frozenset(question.options))
             except PlanningError:
                 continue
         return reading

@@ -19,23 +19,26 @@ from robot.speech.stop_word import transcript_is_stop
 
 
 def read_in_world(transcript: Transcript, read: Callable[[str], Reading]) -> Transcript:
-    """`transcript` as it was when its text reads (or would make the planner ask), when it is a spoken stop, or when
-    none of its other wordings plans (or the first that does is a stop; the prompt's echoes are not read); else with
-    the first that plans as its text, the first heard leading the others."""
+    """`transcript` as it was when its text plans, when it is a spoken stop, or when none of its other wordings
+    plans (or the first that does is a stop; the prompt's echoes are not read); else with the first that plans as
+    its text, the first heard leading the others. A text the planner would ask about ("I want the red apple.": the
+    green apple or the red mug?) gives way only to a wording that plans one of the question's readings ("I want the
+    green apple."): the audio answers the question."""
     if not transcript.text or not transcript.alternatives or transcript_is_stop(transcript):
         return transcript
-    if read(transcript.text) != "unread":
+    first = read(transcript.text)
+    if first.kind == "plans":
         return transcript
     for wording in transcript.alternatives[:MAX_ALTERNATIVES]:
         if wording in transcript.prompt_echoes or not in_latin_script(wording):
             continue
-        if read(wording) == "plans":
-            others = tuple(a for a in transcript.alternatives if a != wording)
-            chosen = replace(
-                transcript, text=wording, alternatives=(transcript.text, *others), first_heard=transcript.text
-            )
-            # a stop the first wording was not ("Stop." under "Stop it, not") is the spoken stop's to hear, not this
-            return transcript if transcript_is_stop(chosen) else chosen
+        reading = read(wording)
+        if reading.kind != "plans" or (first.kind == "asks" and not reading.names & first.names):
+            continue
+        others = tuple(a for a in transcript.alternatives if a != wording)
+        chosen = replace(transcript, text=wording, alternatives=(transcript.text, *others), first_heard=transcript.text)
+        # a stop the first wording was not ("Stop." under "Stop it, not") is the spoken stop's to hear, not this
+        return transcript if transcript_is_stop(chosen) else chosen
     return transcript
 
 
