@@ -105,6 +105,11 @@ STANCE_FOOTPRINT_Y = (-0.18, 0.18)
 # Where the right arm swings out to the side as it rises (stance frame, m): the hand 0.35 m out from the feet centre.
 ARM_SWEEP_X = (-0.1, 0.06)
 ARM_SWEEP_Y = (-0.38, -0.14)
+# ...and the open fingers beyond the hand: by MuJoCo's geometry 0.43 m out, 0.37 m up. At world seed 0 the apple's
+# stance at the counter's end has the wall 1.3 cm beyond them; a walk that ended 5.5 cm nearer the wall (a busy
+# machine) struck it with a finger and the grasp closed on nothing. Where the robot stands at the grasp, the swing
+# needs room out to the fingertips (both edges on the 4 cm grid, for either hand).
+ARM_SWEEP_FINGERTIPS_Y = (-0.44, -0.12)
 # Turns (rad) from a place's approach to try when something stands on the stance: two small, two larger.
 TURNED_FACINGS_RAD = (0.35, -0.35, 0.7, -0.7)
 # How far in from a surface's edge an object can be grasped from that side: the toes stay out of the surface.
@@ -195,12 +200,14 @@ def grasp_stance_facing_any(
     return first
 
 
-def arm_sweep_taken(stance: Stance, blocked: Callable[[float, float], bool]) -> bool:
+def arm_sweep_taken(stance: Stance, blocked: Callable[[float, float], bool], to_fingertips: bool = False) -> bool:
     """Something on the map where the stance's grasping arm swings out sideways before reaching forward
-    (`arm_out_moves`), checked every 4 cm. A stance turned beside a box at world seed 4 swept the hand into it and
-    the grasp closed on nothing: a turned stance needs this clear. At the usual stance the arm comes out in front
+    (`arm_out_moves`), checked every 4 cm: out to the hand, or `to_fingertips` (where the robot stands at the
+    grasp: ARM_SWEEP_FINGERTIPS_Y). A stance turned beside a box at world seed 4 swept the hand into it and the
+    grasp closed on nothing: a turned stance needs this clear. At the usual stance the arm comes out in front
     instead (`arm_out_moves`; world seed 0's bottle has a chair there)."""
-    return _area_taken(stance, ARM_SWEEP_X, _sideways_for_hand(ARM_SWEEP_Y, stance.hand), blocked)
+    sideways = ARM_SWEEP_FINGERTIPS_Y if to_fingertips else ARM_SWEEP_Y
+    return _area_taken(stance, ARM_SWEEP_X, _sideways_for_hand(sideways, stance.hand), blocked)
 
 
 # Other places of the object in the feet frame, inside the reach window with REACH_MARGIN_M to spare, nearest the

@@ -93,7 +93,7 @@ class ArmBody:
 
     def sideways_clear(self, hand: Hand = "right") -> bool:
         blocked = self._blocked()
-        return blocked is None or not arm_sweep_taken(replace(self.feet_stance(), hand=hand), blocked)
+        return blocked is None or not arm_sweep_taken(replace(self.feet_stance(), hand=hand), blocked, True)
 
     def feet_stance(self) -> Stance:
         """Where the feet stand now (their centre and heading, map frame), by the localiser."""

@@ -128,6 +128,28 @@ def test_the_sideways_swing_goes_into_what_stands_there_and_the_way_out_in_front
         assert world > -0.01 and body > 0.0, near
 
 
+def test_where_the_robot_stands_at_the_grasp_the_swing_is_checked_out_to_the_open_fingers() -> None:
+    """World seed 0, the apple's stance at the counter's end (a chair stands at the usual one), the east wall beside
+    the sideways swing. A walk ends a few centimetres off: on a busy machine 5.5 cm nearer the wall, where the open
+    fingers struck it while the check, out to the hand, said the swing was clear, and the grasp closed on nothing.
+    Out to the fingertips, the check finds the wall wherever the swing would touch it, and the arm comes out in front;
+    at the stance itself the swing has room."""
+    stance, blocked = stance_for(0, "green apple")
+    assert stance.yaw == pytest.approx(math.pi / 2)
+    sweep = ArmSweep(0)
+    assert sweep.clearances(stance, arm_out_moves())[0] > 0.0
+    assert not arm_sweep_taken(stance, blocked, to_fingertips=True)
+    touched = []
+    for east in (0.01, 0.02, 0.03, 0.04, 0.055, 0.07):
+        here = Stance(stance.x + east, stance.y, stance.yaw)
+        if sweep.clearances(here, arm_out_moves())[0] < 0.0:
+            touched.append(east)
+            assert arm_sweep_taken(here, blocked, to_fingertips=True), east
+    assert 0.055 in touched
+    near = Stance(stance.x + 0.055, stance.y, stance.yaw)
+    assert not arm_sweep_taken(near, blocked)  # out to the hand only: the check that let the fingers strike the wall
+
+
 @pytest.mark.slow
 def test_the_bottle_beside_the_chair_is_picked_with_the_arm_out_in_front() -> None:
     """In physics, world seed 0: the robot walks to the counter, finds the blue bottle, brings its arm out in

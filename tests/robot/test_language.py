@@ -156,6 +156,20 @@ def test_what_is_not_in_the_world_is_refused_with_what_is(names, phrase: str, me
     assert not isinstance(raised.value, ClarificationNeeded)
 
 
+@pytest.mark.parametrize("command", ["heat the mug", "feed the cup", "seat the cup", "feed the table"])
+def test_an_unknown_verb_before_a_name_is_no_misheard_colour_and_the_request_is_refused(world, command: str) -> None:
+    """ "heat the mug" ~ "tea mug", "feed the cup" ~ "red cup": read as a name said alone, they were fetches of the
+    mug (heldout23's "feed the cat" was heard as "Feed the cup.")."""
+    with pytest.raises(PlanningError, match="I can fetch or carry") as raised:
+        plan(command, world)
+    assert not isinstance(raised.value, ClarificationNeeded)
+    assert plan("the red mud", world)[:3] == [
+        ("navigate_to", "kitchen counter"),
+        ("detect_object", "red mug"),
+        ("pick_object", "red mug"),
+    ]  # a slip inside the name still reads
+
+
 @pytest.mark.parametrize(
     ("phrase", "message"),
     [

@@ -797,6 +797,10 @@ def test_pieces_of_the_prompt_are_echoes_and_go_last() -> None:
     assert not is_echo("red mug") and not is_echo("the dock")  # shorter than ECHO_MIN_WORDS: what people say
     assert not is_echo("Stop! Halt! Freeze!") and not is_echo("Halt! Freeze! Robot")  # a stop is never an echo
     assert not is_echo("Head to the counter.") and not is_echo("pick up the red cup")
+    # a prompt sentence's opening with another ending (heldout23, a Scottish voice: "the bottle, take it to the dock")
+    assert is_echo("Robot, could you please pick up the green apple?")
+    assert not is_echo("Robot, could you please bring me the apple?")  # four words of the opening: people say that
+    assert not is_echo("Could you please pick up the green apple?")  # not the sentence's opening
 
     beams = tuple(f"wording {i}" for i in range(12))
     text, others = arranged("Head to the dock.", ("Head to the dock", *beams), ["Head to the counter."], is_echo)

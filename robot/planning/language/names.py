@@ -94,7 +94,7 @@ class WorldNames:
         described = self._described_object(words)
         if described is not None:
             return described
-        near = _near_miss(words, self._object_names)
+        near = _near_miss(words, self._object_names) if not _words_before_its_article(phrase) else None
         if near is not None:
             return self._one(near)
         raise PlanningError(f"unknown object {_quoted(phrase)}; known objects: {self.known_objects()}")
@@ -152,7 +152,7 @@ class WorldNames:
         described = self._described_place(words, phrase)
         if described is not None:
             return described
-        near = _near_miss(words, self._place_names)
+        near = _near_miss(words, self._place_names) if not _words_before_its_article(phrase) else None
         if near is not None:
             return self._one(near)
         raise PlanningError(f"unknown place {_quoted(phrase)}; known places: {self.known_places()}")
@@ -270,6 +270,19 @@ def _clean(phrase: str) -> str:
     over there" -> "red cup"."""
     words = " ".join(w for w in normalize(phrase).split() if w not in _DROPPED)
     return re.sub(r"(?<=\w) (?:over |right )?(?:there|here)$", "", words)
+
+
+_ARTICLES = frozenset(("the", "a", "an"))
+
+
+def _words_before_its_article(phrase: str) -> bool:
+    """Words before the phrase's first article that only describe: "heat the mug", "feed the cup" (a verb the
+    reader does not know, left in the phrase). A near miss of a name is a slip inside it ("the red mud"); with the
+    unknown verb taken for a misheard colour, "heat the mug" (~ "tea mug") and "feed the cup" (~ "red cup") were
+    fetches, though heating and feeding are no abilities."""
+    words = normalize(phrase).split()
+    first = next((i for i, word in enumerate(words) if word in _ARTICLES), 0)
+    return any(word not in _DROPPED for word in words[:first])
 
 
 def _near_miss(words: str, table: dict[str, list[str]]) -> list[str] | None:
