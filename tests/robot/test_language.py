@@ -156,6 +156,13 @@ def test_what_is_not_in_the_world_is_refused_with_what_is(names, phrase: str, me
     assert not isinstance(raised.value, ClarificationNeeded)
 
 
+@pytest.mark.parametrize(
+    "command", ["go back where you belong", "head back to where you were", "return to where you set off from"]
+)
+def test_everyday_ways_to_say_where_the_robot_started_send_it_home(world, command: str) -> None:
+    assert plan(command, world) == [("go_home",), ("say", "I am back where I started.")]
+
+
 @pytest.mark.parametrize("command", ["heat the mug", "feed the cup", "seat the cup", "feed the table"])
 def test_an_unknown_verb_before_a_name_is_no_misheard_colour_and_the_request_is_refused(world, command: str) -> None:
     """ "heat the mug" ~ "tea mug", "feed the cup" ~ "red cup": read as a name said alone, they were fetches of the

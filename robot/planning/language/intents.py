@@ -150,6 +150,8 @@ _HOME = (
     r"(?:(?:go|come|head|walk|return|get|run|move|drive)(?: on)?(?: back)?(?: to)? (?:home|your home|your start|"
     r"where you started|where you began|the start|the starting point|your starting (?:point|position|spot|place)|"
     r"your start position|base|the beginning|where you came from|where you started from|where you began|start|"
+    r"where you belong|where you were(?: before| at first| at the start)?|where you set off(?: from)?|"
+    r"where you started off|"
     r"(?:your |the )?(?:home|start|starting|initial) (?:position|point|spot|place|pose|location|base)|"
     r"your starting point again)|home|back home|go home)"
 )
