@@ -137,16 +137,17 @@ def run_set(
     layout = generate_world(0)
     world = WorldContext.from_layout(layout)
     planner = planner or build_pipeline(PlannerConfig(backend="rules"))
-    recognizers: dict[str, SpeechRecognizer] = {
-        e: build_recognizer(e, world.objects, world.places, world=world) for e in engines
-    }
-    if "whisper" in recognizers:
-        from robot.speech.whisper import WhisperASR
+    recognizers: dict[str, SpeechRecognizer] = {}
+    for engine in engines:
+        if engine == "whisper":  # built here with the bench's threads and models (not the settings')
+            from robot.speech.whisper import WhisperASR
 
-        whisper = WhisperASR(
-            whisper_model, world.objects, world.places, threads=whisper_threads, second_model=whisper_second_model
-        )
-        recognizers["whisper"] = WorldReadRecognizer(whisper, world)
+            whisper = WhisperASR(
+                whisper_model, world.objects, world.places, threads=whisper_threads, second_model=whisper_second_model
+            )
+            recognizers[engine] = WorldReadRecognizer(whisper, world)
+        else:
+            recognizers[engine] = build_recognizer(engine, world.objects, world.places, world=world)
     spotter = StopSpotter(world.objects, world.places)
     items: list[tuple[str, str, Case | None]] = [("command", c.text, c) for c in spoken.commands]
     items += [("with_stop", c.text, c) for c in spoken.with_stop] + [("stop", t, None) for t in spoken.stops]

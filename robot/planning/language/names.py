@@ -276,10 +276,10 @@ _ARTICLES = frozenset(("the", "a", "an"))
 
 
 def _words_before_its_article(phrase: str) -> bool:
-    """Words before the phrase's first article that only describe: "heat the mug", "feed the cup" (a verb the
-    reader does not know, left in the phrase). A near miss of a name is a slip inside it ("the red mud"); with the
-    unknown verb taken for a misheard colour, "heat the mug" (~ "tea mug") and "feed the cup" (~ "red cup") were
-    fetches, though heating and feeding are no abilities."""
+    """Whether words other than describing ones stand before the phrase's first article: "heat the mug", "feed
+    the cup" (a verb the reader does not know, left in the phrase). A near miss of a name is a slip inside it ("the
+    red mud"); with the unknown verb taken for a misheard colour, "heat the mug" (~ "tea mug") and "feed the cup"
+    (~ "red cup") were fetches, though heating and feeding are no abilities."""
     words = normalize(phrase).split()
     first = next((i for i, word in enumerate(words) if word in _ARTICLES), 0)
     return any(word not in _DROPPED for word in words[:first])
