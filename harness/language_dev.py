@@ -408,7 +408,7 @@ DEV: tuple[LanguageCase, ...] = (
     _e("action synonym", "wait 2.5 seconds", wait("2.5")),
     _e("polite", "stay still for five seconds please", wait("5")),
     _e("action synonym", "pause 4 seconds", wait("4")),
-    _o("incomplete", "give me 5 seconds"),
+    _e("action synonym", "give me 5 seconds", wait("5")),  # time asked for: a wait (refused until stop 91)
     _e("announcement", "say hello and goodbye", say("hello and goodbye")),
     _e("announcement", "say good morning everyone", say("good morning everyone")),
     _e("sequence", "announce that lunch is ready and then go to the table", seq(say("lunch is ready"), go(TABLE))),
@@ -520,7 +520,7 @@ DEV: tuple[LanguageCase, ...] = (
     _e("action synonym", "Head home please", HOME),
     _e("action synonym", "Wait for ten seconds", wait("10")),
     _e("action synonym", "Hold on for a couple of seconds", wait("2")),
-    _o("incomplete", "Give it 5 seconds"),
+    _e("action synonym", "Give it 5 seconds", wait("5")),  # as "give me 5 seconds" (refused until stop 91)
     _e("action synonym", "Pause for 3 seconds please", wait("3")),
     _e("stop", "Stop right there!", STOP),
     _e("stop", "Stop, please.", STOP),

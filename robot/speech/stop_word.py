@@ -62,7 +62,8 @@ MAX_STOP_UTTERANCE_S = 3.5  # longer is no stop "with a few words" (with the qui
 # this stage's false stops fell from 61 to 33 of 3,200 ordinary utterances and its stops from 760 to 749 of 960
 # (with whisper's words, which caught 7 of those 11, the stops heard fell by 4; stop 81).
 STREAMED_FIT_FLOOR = -0.26
-_BEFORE = r"(?:hey|okay|ok|robot|please|now)"
+# "just stop" (the twenty-fifth spoken set, stop 91)
+_BEFORE = r"(?:hey|okay|ok|robot|please|now|just)"
 # "stop the robot", "stop right there", "halt right away": every voice of the fifth spoken set said "stop the robot"
 # and no recogniser's wording of it was taken as a stop (stop 60). "right" alone: whisper splits "stop right away" as
 # "Stop right, I'm weird." (the ninth spoken set, stop 80), leaving three words of tail. "(right) here": "halt right

@@ -262,10 +262,20 @@ def test_a_sequence_says_only_its_last_confirmation_and_does_not_walk_twice(worl
         ("wait half a minute", "30"),
         ("wait for 2.5 s", "2.5"),
         ("stay still for a couple of seconds", "2"),
+        ("give me five seconds", "5"),
+        ("allow us a minute", "60"),
+        ("just a second", "1"),
     ],
 )
 def test_a_wait_is_read_in_words_or_digits(world, text: str, seconds: str) -> None:
     assert plan(text, world) == [("wait", seconds)]
+
+
+def test_time_asked_for_is_a_wait_but_things_asked_for_are_not(world) -> None:
+    assert plan("give me a minute please", world) == [("wait", "60")]
+    assert plan("give me the apple", world)[0] == ("navigate_to", "kitchen counter")
+    with pytest.raises(PlanningError, match="unknown object 'two apples'"):
+        plan("give me two apples", world)
 
 
 def test_stop_with_more_words_is_a_stop_but_stop_there_ends_another_step(world) -> None:

@@ -478,6 +478,7 @@ def test_a_transcript_is_a_stop_when_its_words_are_a_stop_phrase_with_a_few_more
         "Stop right there!",
         "halt right away",
         "Stop right here.",
+        "Just stop.",
     ):
         assert is_stop_utterance(text), text
     for text in (
@@ -489,6 +490,7 @@ def test_a_transcript_is_a_stop_when_its_words_are_a_stop_phrase_with_a_few_more
         "stop the robot from falling over",
         "stop at the table",
         "put the robot on the dock",
+        "just stop by the kitchen",
     ):
         assert not is_stop_utterance(text), text
 

@@ -262,6 +262,13 @@ def _shapes() -> tuple[tuple[re.Pattern[str], Build], ...]:
         ),
         # "wait four seconds" as a recogniser often writes it: a number that sounds like "for", "to" or "too"
         (rf"{wait_verbs} (?:for )?(?P<n>for|to|too) (?P<unit>seconds|minutes)", _wait),
+        # time asked for: "give me five seconds", "give it a minute", "just a second" (the twenty-fifth spoken set,
+        # stop 91); the unit is needed here, so "give me two apples" stays a request for things
+        (
+            rf"(?:(?:give|allow|grant) (?:me|us|it)(?: (?:about|around|roughly|just|another))? |just |only )?"
+            rf"(?P<n>{_NUMBER}) (?P<unit>seconds?|secs?|minutes?|mins?)",
+            _wait,
+        ),
         (_CHARGE, lambda m, c: Step("go", place="charger")),
         # a walk named by a noun: "take a walk to the kitchen", "make your way to the dock"
         (
